@@ -1,0 +1,26 @@
+// Shared constants and the per-frame uniform block layout (mirrors render::FrameUniforms).
+#ifndef DVSGI_COMMON_GLSL
+#define DVSGI_COMMON_GLSL
+
+const float PI = 3.14159265358979323846;
+const float INV_PI = 0.31830988618379067154;
+// Largest finite half float; radiance written to 16-bit targets is clamped here.
+const float HALF_MAX = 65504.0;
+
+struct FrameData {
+    mat4 view;
+    mat4 proj;
+    mat4 view_proj;
+    mat4 inv_view_proj;
+    vec4 camera_pos;   // xyz camera position, w scene time (s)
+    uvec4 counts;      // x width, y height, z light count, w tone map (0 aces, 1 reinhard, 2 clamp)
+    vec4 shadow;       // x PCF radius (texels), y normal bias (texels), z shadow map size, w exposure scale 2^EV
+};
+
+// Normalize, or `fallback` for a zero-length / non-finite vector.
+vec3 safe_normalize(vec3 v, vec3 fallback) {
+    float l2 = dot(v, v);
+    return (l2 > 1e-30 && !isinf(l2)) ? v * inversesqrt(l2) : fallback;
+}
+
+#endif

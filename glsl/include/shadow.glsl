@@ -1,0 +1,65 @@
+// Shadow-map lookup with normal offset and PCF (mirrors render::lights::GpuShadowView).
+// Every shadow view (directional: 1, spot: 1, point: 6 cube faces +X,-X,+Y,-Y,+Z,-Z) is a
+// layer of one depth array texture.
+#ifndef DVSGI_SHADOW_GLSL
+#define DVSGI_SHADOW_GLSL
+#include "lights.glsl"
+
+struct ShadowView {
+    mat4 view_proj;
+    vec4 params;     // x world size of a texel (ortho) or per unit distance (perspective), y 1 = ortho
+};
+
+// The view of a light that covers P.
+int shadow_view_index(Light l, vec3 P) {
+    if (l.shadow.y == 6) {
+        vec3 d = P - l.position.xyz;
+        vec3 a = abs(d);
+        int face;
+        if (a.x >= a.y && a.x >= a.z) {
+            face = d.x > 0.0 ? 0 : 1;
+        } else if (a.y >= a.z) {
+            face = d.y > 0.0 ? 2 : 3;
+        } else {
+            face = d.z > 0.0 ? 4 : 5;
+        }
+        return l.shadow.x + face;
+    }
+    return l.shadow.x;
+}
+
+// Fraction of the light reaching P (1 lit, 0 shadowed). `radius` PCF radius and
+// `normal_bias` offset are in shadow-map texels; `size` is the map's side in texels.
+float shadow_visibility(sampler2DArrayShadow map, ShadowView v, int layer, vec3 P, vec3 N, vec3 wi,
+                        float dist, float radius, float normal_bias, float size) {
+    float texel = v.params.y > 0.5 ? v.params.x : v.params.x * max(dist, 1e-6);
+    float cos_l = clamp(dot(N, wi), 0.0, 1.0);
+    float sin_l = sqrt(max(1.0 - cos_l * cos_l, 0.0));
+    // Offset along the normal, more at grazing angles where acne appears.
+    vec3 Pb = P + N * texel * normal_bias * (0.5 + sin_l);
+    vec4 clip = v.view_proj * vec4(Pb, 1.0);
+    if (clip.w <= 0.0) {
+        return 1.0;
+    }
+    vec3 ndc = clip.xyz / clip.w;
+    vec2 uv = ndc.xy * 0.5 + 0.5;
+    if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0))) || ndc.z > 1.0) {
+        return 1.0;
+    }
+    float ref = ndc.z;
+    if (radius <= 0.0) {
+        return texture(map, vec4(uv, float(layer), ref));
+    }
+    // 4x4 bilinear compare taps spread over the radius (a 5x5-texel footprint at radius 1.5).
+    float sum = 0.0;
+    float step_uv = radius / (1.5 * size);
+    for (int y = 0; y < 4; ++y) {
+        for (int x = 0; x < 4; ++x) {
+            vec2 o = (vec2(x, y) - 1.5) * step_uv;
+            sum += texture(map, vec4(uv + o, float(layer), ref));
+        }
+    }
+    return sum / 16.0;
+}
+
+#endif

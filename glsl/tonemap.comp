@@ -1,0 +1,23 @@
+#version 460
+// Display transform: radiance * 2^EV, tone map, sRGB encode into the 8-bit output.
+#include "common.glsl"
+#include "color.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
+layout(set = 0, binding = 1, rgba32f) uniform readonly image2D in_radiance;
+layout(set = 0, binding = 2, rgba8) uniform writeonly image2D out_display;
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(uvec2(px), frame.counts.xy))) return;
+    vec3 c = imageLoad(in_radiance, px).rgb;
+    // Non-finite radiance shows as magenta, never silently as black or white.
+    if (any(isnan(c)) || any(isinf(c))) {
+        imageStore(out_display, px, vec4(1.0, 0.0, 1.0, 1.0));
+        return;
+    }
+    vec3 mapped = tonemap(c * frame.shadow.w, frame.counts.w);
+    imageStore(out_display, px, vec4(linear_to_srgb(mapped), 1.0));
+}

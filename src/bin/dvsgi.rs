@@ -1,0 +1,170 @@
+//! `dvsgi`: render scenes headless and inspect devices.
+
+use clap::{Parser, Subcommand};
+use dvsgi::cli::{check_validation, report, CommonArgs};
+use dvsgi::gpu::Context;
+use dvsgi::render::Renderer;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "dvsgi", version, about = "Deferred Voxel Shading: voxel cone traced global illumination over Vulkan")]
+struct Cli {
+    #[command(flatten)]
+    common: CommonArgs,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// List Vulkan devices and describe the chosen one (queues, features); with a scene,
+    /// also the passes a frame runs and the GPU memory it uses.
+    Info {
+        /// Scene file to describe.
+        scene: Option<PathBuf>,
+    },
+    /// Render a scene to PNG (tone-mapped sRGB) and/or EXR (linear radiance).
+    Render {
+        /// Scene file (TOML; see scenes/FORMAT.md).
+        scene: PathBuf,
+        /// Output file(s): .png or .exr (repeatable).
+        #[arg(long, short, required = true)]
+        out: Vec<PathBuf>,
+        /// Image width (overrides render.width).
+        #[arg(long)]
+        width: Option<u32>,
+        /// Image height (overrides render.height).
+        #[arg(long)]
+        height: Option<u32>,
+        /// Scene time in seconds at which motion is evaluated (overrides render.time).
+        #[arg(long)]
+        time: Option<f32>,
+        /// Print the passes, the barriers and timings.
+        #[arg(long, short)]
+        verbose: bool,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            report(&e);
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> dvsgi::Result<()> {
+    match cli.command {
+        Command::Info { scene } => info(&cli.common, scene),
+        Command::Render { scene, out, width, height, time, verbose } => {
+            // Fail on unwritable targets before doing any work.
+            for o in &out {
+                dvsgi::output::check_target(o)?;
+            }
+            let mut extra = Vec::new();
+            if let Some(w) = width {
+                extra.push(("render.width".to_string(), w.to_string()));
+            }
+            if let Some(h) = height {
+                extra.push(("render.height".to_string(), h.to_string()));
+            }
+            if let Some(t) = time {
+                extra.push(("render.time".to_string(), format!("{t:?}")));
+            }
+            let scene = cli.common.load_scene(&scene, &extra)?;
+            let ctx = cli.common.context()?;
+            let t = scene.settings.time;
+            let mut renderer = Renderer::new(&ctx, scene)?;
+            let stats = renderer.render(t, true)?;
+            if verbose {
+                println!("device: {} ({})", ctx.info.name, ctx.info.driver_info);
+                println!("passes: {}", renderer.pass_names(true).join(" -> "));
+                for b in &renderer.last_barriers {
+                    println!("  barrier {b}");
+                }
+                println!("frame: {:.2} ms host wall clock (record + submit + wait)", stats.host_ms);
+                for p in &stats.passes {
+                    println!("  {:<20} {:>8.3} ms GPU timestamps", p.name, p.gpu_ms);
+                }
+            }
+            check_validation(&ctx)?;
+            let frame = renderer.output();
+            for o in &out {
+                dvsgi::output::write_frame(o, &frame)?;
+                println!("wrote {}", o.display());
+            }
+            Ok(())
+        }
+    }
+}
+
+fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
+    let scene = scene.map(|s| common.load_scene(&s, &[])).transpose()?;
+    println!("Vulkan devices:");
+    for c in Context::list_devices()? {
+        println!(
+            "  [{}] {} ({:?}, Vulkan {}.{}){}",
+            c.index,
+            c.name,
+            c.device_type,
+            ash::vk::api_version_major(c.api_version),
+            ash::vk::api_version_minor(c.api_version),
+            c.unusable.map(|u| format!(" — unusable: {u}")).unwrap_or_default()
+        );
+    }
+    let ctx = common.context()?;
+    let i = &ctx.info;
+    println!("chosen device: [{}] {}", i.index, i.name);
+    println!("  type: {:?}", i.device_type);
+    println!("  driver: {} ({})", i.driver_name, i.driver_info);
+    println!("  Vulkan: {}", i.api_version_string());
+    println!("  queue families:");
+    for f in &i.families {
+        println!("    [{}] {:?} x{} (timestamp bits {})", f.index, f.flags, f.count, f.timestamp_valid_bits);
+    }
+    println!("  graphics queue: family {} index {}", ctx.graphics_queue.family, ctx.graphics_queue.index);
+    println!("  compute queue: family {} index {}", ctx.compute_queue.family, ctx.compute_queue.index);
+    println!("  queue topology: {}", ctx.topology.describe());
+    println!("  required features: timelineSemaphore synchronization2 dynamicRendering maintenance4 (enabled)");
+    let o = &i.optional;
+    let yn = |b: bool| if b { "yes" } else { "no" };
+    println!(
+        "  optional: geometryShader {} fragmentStoresAndAtomics {} depthClamp {} conservativeRasterization {} \
+         calibratedTimestamps {} shaderImageFloat32Atomics {}",
+        yn(o.geometry_shader),
+        yn(o.fragment_stores_and_atomics),
+        yn(o.depth_clamp),
+        yn(o.conservative_rasterization),
+        yn(o.calibrated_timestamps),
+        yn(o.shader_image_float32_atomics)
+    );
+    println!(
+        "  timestamp period: {} ns; maxImageDimension2D {}, maxImageDimension3D {}",
+        i.timestamp_period_ns, i.limits.max_image_dimension2_d, i.limits.max_image_dimension3_d
+    );
+    println!("  validation: {}", if ctx.validation_enabled { "on" } else { "off" });
+    if let Some(scene) = scene {
+        println!(
+            "scene {}: {} objects, {} meshes, {} triangles, {} materials, {} lights",
+            scene.path.display(),
+            scene.objects.len(),
+            scene.meshes.len(),
+            scene.triangle_count(),
+            scene.materials.len(),
+            scene.lights.len()
+        );
+        let before = ctx.allocated_bytes();
+        let renderer = Renderer::new(&ctx, scene)?;
+        println!("  passes: {}", renderer.pass_names(false).join(" -> "));
+        println!(
+            "  GPU memory allocated for the scene and frame: {:.2} MiB",
+            (ctx.allocated_bytes() - before) as f64 / (1024.0 * 1024.0)
+        );
+    }
+    check_validation(&ctx)?;
+    Ok(())
+}

@@ -1,0 +1,76 @@
+//! Command-line pieces shared by the `dvsgi` and `bench` binaries.
+
+use crate::gpu::{Context, ContextDesc};
+use crate::scene::{self, LoadOptions, Scene};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Options every command that touches the GPU or a scene accepts.
+#[derive(Debug, Clone, clap::Args)]
+pub struct CommonArgs {
+    /// Enable the Khronos validation layer (also: DVSGI_VALIDATION=1); any validation error
+    /// makes the command fail.
+    #[arg(long, global = true)]
+    pub validation: bool,
+    /// Vulkan device: index from `dvsgi info` or part of its name (also: DVSGI_DEVICE).
+    #[arg(long, global = true, value_name = "N|NAME")]
+    pub device: Option<String>,
+    /// Extra directory searched for scene assets (repeatable; also DVSGI_ASSET_PATH,
+    /// colon-separated).
+    #[arg(long = "asset-path", global = true, value_name = "DIR")]
+    pub asset_paths: Vec<PathBuf>,
+    /// Override a scene setting, e.g. --set camera.fov_y=45 --set render.exposure=1
+    /// (repeatable; keys as in the scene file, array elements by index: lights.0.intensity).
+    #[arg(long = "set", global = true, value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+}
+
+impl CommonArgs {
+    pub fn context(&self) -> crate::Result<Arc<Context>> {
+        Ok(Context::new(&ContextDesc { validation: self.validation, device: self.device.clone() })?)
+    }
+
+    /// Load a scene with the `--set` overrides plus `extra` ones (from dedicated flags such
+    /// as --width, applied last).
+    pub fn load_scene(&self, path: &Path, extra: &[(String, String)]) -> crate::Result<Scene> {
+        let mut overrides = Vec::new();
+        for s in &self.sets {
+            overrides.push(scene::parse_override(s)?);
+        }
+        overrides.extend_from_slice(extra);
+        let mut asset_paths = self.asset_paths.clone();
+        if let Ok(env) = std::env::var("DVSGI_ASSET_PATH") {
+            asset_paths.extend(std::env::split_paths(&env).filter(|p| !p.as_os_str().is_empty()));
+        }
+        Ok(scene::load(path, &LoadOptions { overrides, asset_paths })?)
+    }
+}
+
+/// Fail if validation was on and reported errors.
+pub fn check_validation(ctx: &Context) -> crate::Result<()> {
+    if ctx.validation_enabled && ctx.validation().errors() > 0 {
+        return Err(crate::Error::Validation(ctx.validation().errors()));
+    }
+    Ok(())
+}
+
+/// Print an error and its causes, one per line.
+pub fn report(e: &dyn std::error::Error) {
+    eprintln!("error: {e}");
+    let mut source = e.source();
+    while let Some(s) = source {
+        eprintln!("  caused by: {s}");
+        source = s.source();
+    }
+}
+
+/// Statistics over samples: (min, median, p95).
+pub fn stats(samples: &[f64]) -> (f64, f64, f64) {
+    if samples.is_empty() {
+        return (f64::NAN, f64::NAN, f64::NAN);
+    }
+    let mut v = samples.to_vec();
+    v.sort_by(|a, b| a.total_cmp(b));
+    let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+    (v[0], q(0.5), q(0.95))
+}

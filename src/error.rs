@@ -1,0 +1,20 @@
+//! The application-level error: one variant per layer, each with its own error type.
+
+/// Everything that can stop a dvsgi command.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error(transparent)]
+    Scene(#[from] crate::scene::SceneError),
+    #[error(transparent)]
+    Gpu(#[from] crate::gpu::GpuError),
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
+    /// Vulkan validation reported errors (only when validation is on).
+    #[error("Vulkan validation reported {0} error(s); see the messages above")]
+    Validation(u32),
+    /// Bad command-line usage not caught by the argument parser.
+    #[error("{0}")]
+    Usage(String),
+}
+
+pub type Result<T> = std::result::Result<T, Error>;

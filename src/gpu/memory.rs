@@ -1,0 +1,313 @@
+//! Buffers and images, all memory through gpu-allocator, every object named.
+
+use super::context::Context;
+use super::error::{GpuError, GpuResult, VkContext};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+pub struct Buffer {
+    ctx: Arc<Context>,
+    pub raw: vk::Buffer,
+    allocation: Option<Allocation>,
+    pub size: u64,
+    pub name: String,
+}
+
+impl Buffer {
+    pub fn new(
+        ctx: &Arc<Context>,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> GpuResult<Buffer> {
+        let size = size.max(4);
+        let d = &ctx.device;
+        let raw = unsafe {
+            d.create_buffer(
+                &vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE),
+                None,
+            )
+        }
+        .vk("vkCreateBuffer")?;
+        let req = unsafe { d.get_buffer_memory_requirements(raw) };
+        let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
+            name,
+            requirements: req,
+            location,
+            linear: true,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(source) => {
+                unsafe { d.destroy_buffer(raw, None) };
+                return Err(GpuError::Alloc { name: name.to_string(), source });
+            }
+        };
+        if let Err(e) = unsafe { d.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) } {
+            unsafe { d.destroy_buffer(raw, None) };
+            let _ = ctx.allocator().free(allocation);
+            return Err(GpuError::Vk { call: "vkBindBufferMemory", result: e });
+        }
+        ctx.name_object(raw, name);
+        Ok(Buffer { ctx: ctx.clone(), raw, allocation: Some(allocation), size, name: name.to_string() })
+    }
+
+    /// Host-visible bytes (CpuToGpu / GpuToCpu buffers only).
+    pub fn mapped(&self) -> Option<&[u8]> {
+        self.allocation.as_ref()?.mapped_slice()
+    }
+
+    /// Copy `data` into a host-visible buffer at `offset`. The caller guarantees the GPU is
+    /// not reading the written range (the frame that used it has completed).
+    pub fn write(&self, offset: usize, data: &[u8]) {
+        let alloc = self.allocation.as_ref().expect("live buffer");
+        let ptr = alloc.mapped_ptr().expect("Buffer::write on a buffer that is not host-visible");
+        assert!(offset + data.len() <= alloc.size() as usize, "write past the end of {}", self.name);
+        // SAFETY: in bounds (checked above), host-visible persistently mapped memory, and no
+        // GPU access to the range is in flight (caller's contract).
+        unsafe {
+            std::ptr::copy_nonoverlapping(data.as_ptr(), (ptr.as_ptr() as *mut u8).add(offset), data.len());
+        }
+    }
+
+    pub fn write_pod<T: bytemuck::Pod>(&self, data: &[T]) {
+        self.write(0, bytemuck::cast_slice(data));
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        unsafe { self.ctx.device.destroy_buffer(self.raw, None) };
+        if let Some(a) = self.allocation.take() {
+            let _ = self.ctx.allocator().free(a);
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImageKind {
+    D2,
+    D2Array,
+    D3,
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct ImageDesc {
+    pub kind: ImageKind,
+    pub format: vk::Format,
+    pub extent: vk::Extent3D,
+    pub mip_levels: u32,
+    /// Array layers (D2Array).
+    pub layers: u32,
+    pub usage: vk::ImageUsageFlags,
+}
+
+impl ImageDesc {
+    pub fn d2(format: vk::Format, width: u32, height: u32, usage: vk::ImageUsageFlags) -> Self {
+        ImageDesc {
+            kind: ImageKind::D2,
+            format,
+            extent: vk::Extent3D { width, height, depth: 1 },
+            mip_levels: 1,
+            layers: 1,
+            usage,
+        }
+    }
+    pub fn d2_array(format: vk::Format, width: u32, height: u32, layers: u32, usage: vk::ImageUsageFlags) -> Self {
+        ImageDesc { kind: ImageKind::D2Array, layers, ..Self::d2(format, width, height, usage) }
+    }
+    pub fn d3(format: vk::Format, size: u32, mip_levels: u32, usage: vk::ImageUsageFlags) -> Self {
+        ImageDesc {
+            kind: ImageKind::D3,
+            format,
+            extent: vk::Extent3D { width: size, height: size, depth: size },
+            mip_levels,
+            layers: 1,
+            usage,
+        }
+    }
+    pub fn aspect(&self) -> vk::ImageAspectFlags {
+        match self.format {
+            vk::Format::D32_SFLOAT | vk::Format::D16_UNORM | vk::Format::X8_D24_UNORM_PACK32 => {
+                vk::ImageAspectFlags::DEPTH
+            }
+            vk::Format::D24_UNORM_S8_UINT | vk::Format::D32_SFLOAT_S8_UINT => {
+                vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL
+            }
+            _ => vk::ImageAspectFlags::COLOR,
+        }
+    }
+    pub fn full_range(&self) -> vk::ImageSubresourceRange {
+        vk::ImageSubresourceRange {
+            aspect_mask: self.aspect(),
+            base_mip_level: 0,
+            level_count: self.mip_levels,
+            base_array_layer: 0,
+            layer_count: self.layers,
+        }
+    }
+}
+
+pub struct Image {
+    ctx: Arc<Context>,
+    pub raw: vk::Image,
+    /// View of the whole image (all mips, all layers).
+    pub view: vk::ImageView,
+    /// One 2D view per array layer (D2Array only), for rendering into a layer.
+    pub layer_views: Vec<vk::ImageView>,
+    allocation: Option<Allocation>,
+    pub desc: ImageDesc,
+    pub name: String,
+    pub bytes: u64,
+}
+
+impl Image {
+    pub fn new(ctx: &Arc<Context>, name: &str, desc: ImageDesc) -> GpuResult<Image> {
+        let d = &ctx.device;
+        let lim = &ctx.info.limits;
+        let (max, what) = match desc.kind {
+            ImageKind::D3 => (lim.max_image_dimension3_d, "maxImageDimension3D"),
+            _ => (lim.max_image_dimension2_d, "maxImageDimension2D"),
+        };
+        if desc.extent.width.max(desc.extent.height).max(desc.extent.depth) > max {
+            return Err(GpuError::Limit(format!(
+                "image {name:?} is {}x{}x{}, beyond this device's {what} = {max}",
+                desc.extent.width, desc.extent.height, desc.extent.depth
+            )));
+        }
+        if desc.kind == ImageKind::D2Array && desc.layers > lim.max_image_array_layers {
+            return Err(GpuError::Limit(format!(
+                "image {name:?} needs {} layers, beyond this device's maxImageArrayLayers = {}",
+                desc.layers, lim.max_image_array_layers
+            )));
+        }
+        let image_type = match desc.kind {
+            ImageKind::D3 => vk::ImageType::TYPE_3D,
+            _ => vk::ImageType::TYPE_2D,
+        };
+        let raw = unsafe {
+            d.create_image(
+                &vk::ImageCreateInfo::default()
+                    .image_type(image_type)
+                    .format(desc.format)
+                    .extent(desc.extent)
+                    .mip_levels(desc.mip_levels)
+                    .array_layers(desc.layers)
+                    .samples(vk::SampleCountFlags::TYPE_1)
+                    .tiling(vk::ImageTiling::OPTIMAL)
+                    .usage(desc.usage)
+                    .sharing_mode(vk::SharingMode::EXCLUSIVE)
+                    .initial_layout(vk::ImageLayout::UNDEFINED),
+                None,
+            )
+        }
+        .vk("vkCreateImage")?;
+        let req = unsafe { d.get_image_memory_requirements(raw) };
+        let allocation = match ctx.allocator().allocate(&AllocationCreateDesc {
+            name,
+            requirements: req,
+            location: MemoryLocation::GpuOnly,
+            linear: false,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        }) {
+            Ok(a) => a,
+            Err(source) => {
+                unsafe { d.destroy_image(raw, None) };
+                return Err(GpuError::Alloc { name: name.to_string(), source });
+            }
+        };
+        let mut img = Image {
+            ctx: ctx.clone(),
+            raw,
+            view: vk::ImageView::null(),
+            layer_views: Vec::new(),
+            allocation: None,
+            desc,
+            name: name.to_string(),
+            bytes: req.size,
+        };
+        unsafe { d.bind_image_memory(raw, allocation.memory(), allocation.offset()) }.vk("vkBindImageMemory")?;
+        img.allocation = Some(allocation);
+        ctx.name_object(raw, name);
+        let view_type = match desc.kind {
+            ImageKind::D2 => vk::ImageViewType::TYPE_2D,
+            ImageKind::D2Array => vk::ImageViewType::TYPE_2D_ARRAY,
+            ImageKind::D3 => vk::ImageViewType::TYPE_3D,
+        };
+        img.view = img.create_view(view_type, desc.full_range())?;
+        ctx.name_object(img.view, &format!("{name} view"));
+        if desc.kind == ImageKind::D2Array {
+            for layer in 0..desc.layers {
+                let range = vk::ImageSubresourceRange {
+                    base_array_layer: layer,
+                    layer_count: 1,
+                    level_count: 1,
+                    ..desc.full_range()
+                };
+                let v = img.create_view(vk::ImageViewType::TYPE_2D, range)?;
+                ctx.name_object(v, &format!("{name} layer {layer}"));
+                img.layer_views.push(v);
+            }
+        }
+        Ok(img)
+    }
+
+    fn create_view(&self, ty: vk::ImageViewType, range: vk::ImageSubresourceRange) -> GpuResult<vk::ImageView> {
+        unsafe {
+            self.ctx.device.create_image_view(
+                &vk::ImageViewCreateInfo::default()
+                    .image(self.raw)
+                    .view_type(ty)
+                    .format(self.desc.format)
+                    .subresource_range(range),
+                None,
+            )
+        }
+        .vk("vkCreateImageView")
+    }
+
+    pub fn extent2d(&self) -> vk::Extent2D {
+        vk::Extent2D { width: self.desc.extent.width, height: self.desc.extent.height }
+    }
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        unsafe {
+            for v in self.layer_views.drain(..) {
+                self.ctx.device.destroy_image_view(v, None);
+            }
+            if self.view != vk::ImageView::null() {
+                self.ctx.device.destroy_image_view(self.view, None);
+            }
+            self.ctx.device.destroy_image(self.raw, None);
+        }
+        if let Some(a) = self.allocation.take() {
+            let _ = self.ctx.allocator().free(a);
+        }
+    }
+}
+
+/// A sampler with RAII.
+pub struct Sampler {
+    ctx: Arc<Context>,
+    pub raw: vk::Sampler,
+}
+
+impl Sampler {
+    pub fn new(ctx: &Arc<Context>, name: &str, info: &vk::SamplerCreateInfo) -> GpuResult<Sampler> {
+        let raw = unsafe { ctx.device.create_sampler(info, None) }.vk("vkCreateSampler")?;
+        ctx.name_object(raw, name);
+        Ok(Sampler { ctx: ctx.clone(), raw })
+    }
+}
+
+impl Drop for Sampler {
+    fn drop(&mut self) {
+        unsafe { self.ctx.device.destroy_sampler(self.raw, None) };
+    }
+}

@@ -1,0 +1,427 @@
+//! Descriptor sets and pipelines (compute and dynamic-rendering graphics), with RAII.
+
+use super::context::Context;
+use super::error::{GpuResult, VkContext};
+use super::memory::Buffer;
+use ash::vk;
+use std::sync::Arc;
+
+/// One binding of a descriptor set; the binding number is its position in the list.
+pub enum Bind<'a> {
+    Uniform(&'a Buffer),
+    Storage(&'a Buffer),
+    /// Combined image sampler.
+    Sampled(vk::ImageView, vk::Sampler, vk::ImageLayout),
+    /// Array of combined image samplers.
+    SampledArray(Vec<vk::ImageView>, vk::Sampler, vk::ImageLayout),
+    StorageImage(vk::ImageView),
+}
+
+impl Bind<'_> {
+    fn ty(&self) -> vk::DescriptorType {
+        match self {
+            Bind::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
+            Bind::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
+            Bind::Sampled(..) | Bind::SampledArray(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            Bind::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
+        }
+    }
+    fn count(&self) -> u32 {
+        match self {
+            Bind::SampledArray(v, ..) => v.len() as u32,
+            _ => 1,
+        }
+    }
+}
+
+/// A descriptor set with its own layout and pool, written once at creation.
+pub struct DescriptorSet {
+    ctx: Arc<Context>,
+    pub layout: vk::DescriptorSetLayout,
+    pool: vk::DescriptorPool,
+    pub set: vk::DescriptorSet,
+}
+
+impl DescriptorSet {
+    pub fn new(ctx: &Arc<Context>, name: &str, stages: vk::ShaderStageFlags, binds: &[Bind]) -> GpuResult<Self> {
+        let d = &ctx.device;
+        let bindings: Vec<_> = binds
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(i as u32)
+                    .descriptor_type(b.ty())
+                    .descriptor_count(b.count())
+                    .stage_flags(stages)
+            })
+            .collect();
+        let layout = unsafe {
+            d.create_descriptor_set_layout(&vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings), None)
+        }
+        .vk("vkCreateDescriptorSetLayout")?;
+        ctx.name_object(layout, &format!("{name} layout"));
+        let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
+        for b in binds {
+            match sizes.iter_mut().find(|s| s.ty == b.ty()) {
+                Some(s) => s.descriptor_count += b.count(),
+                None => sizes.push(vk::DescriptorPoolSize { ty: b.ty(), descriptor_count: b.count() }),
+            }
+        }
+        let mut me = DescriptorSet {
+            ctx: ctx.clone(),
+            layout,
+            pool: vk::DescriptorPool::null(),
+            set: vk::DescriptorSet::null(),
+        };
+        if sizes.is_empty() {
+            sizes.push(vk::DescriptorPoolSize { ty: vk::DescriptorType::UNIFORM_BUFFER, descriptor_count: 1 });
+        }
+        me.pool = unsafe {
+            d.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes), None)
+        }
+        .vk("vkCreateDescriptorPool")?;
+        ctx.name_object(me.pool, &format!("{name} pool"));
+        let layouts = [layout];
+        me.set = unsafe {
+            d.allocate_descriptor_sets(
+                &vk::DescriptorSetAllocateInfo::default().descriptor_pool(me.pool).set_layouts(&layouts),
+            )
+        }
+        .vk("vkAllocateDescriptorSets")?[0];
+        ctx.name_object(me.set, name);
+
+        // Keep the info arrays alive until the update call.
+        let mut buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = Vec::new();
+        let mut image_infos: Vec<Vec<vk::DescriptorImageInfo>> = Vec::new();
+        for b in binds {
+            match b {
+                Bind::Uniform(buf) | Bind::Storage(buf) => {
+                    buffer_infos.push([vk::DescriptorBufferInfo { buffer: buf.raw, offset: 0, range: vk::WHOLE_SIZE }])
+                }
+                Bind::Sampled(view, sampler, layout) => image_infos.push(vec![vk::DescriptorImageInfo {
+                    sampler: *sampler,
+                    image_view: *view,
+                    image_layout: *layout,
+                }]),
+                Bind::SampledArray(views, sampler, layout) => image_infos.push(
+                    views
+                        .iter()
+                        .map(|v| vk::DescriptorImageInfo { sampler: *sampler, image_view: *v, image_layout: *layout })
+                        .collect(),
+                ),
+                Bind::StorageImage(view) => image_infos.push(vec![vk::DescriptorImageInfo {
+                    sampler: vk::Sampler::null(),
+                    image_view: *view,
+                    image_layout: vk::ImageLayout::GENERAL,
+                }]),
+            }
+        }
+        let (mut bi, mut ii) = (0, 0);
+        let writes: Vec<_> = binds
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                let w = vk::WriteDescriptorSet::default().dst_set(me.set).dst_binding(i as u32).descriptor_type(b.ty());
+                match b {
+                    Bind::Uniform(_) | Bind::Storage(_) => {
+                        bi += 1;
+                        w.buffer_info(&buffer_infos[bi - 1])
+                    }
+                    _ => {
+                        ii += 1;
+                        w.image_info(&image_infos[ii - 1])
+                    }
+                }
+            })
+            .collect();
+        unsafe { d.update_descriptor_sets(&writes, &[]) };
+        Ok(me)
+    }
+}
+
+impl Drop for DescriptorSet {
+    fn drop(&mut self) {
+        unsafe {
+            self.ctx.device.destroy_descriptor_pool(self.pool, None);
+            self.ctx.device.destroy_descriptor_set_layout(self.layout, None);
+        }
+    }
+}
+
+pub struct Pipeline {
+    ctx: Arc<Context>,
+    pub raw: vk::Pipeline,
+    pub layout: vk::PipelineLayout,
+    pub bind_point: vk::PipelineBindPoint,
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        unsafe {
+            self.ctx.device.destroy_pipeline(self.raw, None);
+            self.ctx.device.destroy_pipeline_layout(self.layout, None);
+        }
+    }
+}
+
+fn shader_module(ctx: &Context, name: &str, spirv: &[u8]) -> GpuResult<vk::ShaderModule> {
+    let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv)).expect("build.rs produced valid SPIR-V");
+    let m = unsafe { ctx.device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None) }
+        .vk("vkCreateShaderModule")?;
+    ctx.name_object(m, name);
+    Ok(m)
+}
+
+fn pipeline_layout(
+    ctx: &Context,
+    name: &str,
+    set_layouts: &[vk::DescriptorSetLayout],
+    push_size: u32,
+) -> GpuResult<vk::PipelineLayout> {
+    let ranges = [vk::PushConstantRange { stage_flags: vk::ShaderStageFlags::ALL, offset: 0, size: push_size }];
+    let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(set_layouts);
+    if push_size > 0 {
+        info = info.push_constant_ranges(&ranges);
+    }
+    let l = unsafe { ctx.device.create_pipeline_layout(&info, None) }.vk("vkCreatePipelineLayout")?;
+    ctx.name_object(l, &format!("{name} layout"));
+    Ok(l)
+}
+
+/// Specialization constants: (constant_id, u32 value).
+struct Spec {
+    entries: Vec<vk::SpecializationMapEntry>,
+    data: Vec<u8>,
+}
+
+impl Spec {
+    fn new(constants: &[(u32, u32)]) -> Spec {
+        let mut entries = Vec::new();
+        let mut data = Vec::new();
+        for (id, v) in constants {
+            entries.push(vk::SpecializationMapEntry { constant_id: *id, offset: data.len() as u32, size: 4 });
+            data.extend_from_slice(&v.to_ne_bytes());
+        }
+        Spec { entries, data }
+    }
+    fn info(&self) -> vk::SpecializationInfo<'_> {
+        vk::SpecializationInfo::default().map_entries(&self.entries).data(&self.data)
+    }
+}
+
+impl Pipeline {
+    pub fn compute(
+        ctx: &Arc<Context>,
+        name: &str,
+        spirv: &[u8],
+        set_layouts: &[vk::DescriptorSetLayout],
+        push_size: u32,
+        spec: &[(u32, u32)],
+    ) -> GpuResult<Pipeline> {
+        let d = &ctx.device;
+        let module = shader_module(ctx, name, spirv)?;
+        let layout = match pipeline_layout(ctx, name, set_layouts, push_size) {
+            Ok(l) => l,
+            Err(e) => {
+                unsafe { d.destroy_shader_module(module, None) };
+                return Err(e);
+            }
+        };
+        let spec = Spec::new(spec);
+        let spec_info = spec.info();
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module)
+            .name(c"main")
+            .specialization_info(&spec_info);
+        let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
+        let result = unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
+        unsafe { d.destroy_shader_module(module, None) };
+        let raw = match result {
+            Ok(p) => p[0],
+            Err((_, e)) => {
+                unsafe { d.destroy_pipeline_layout(layout, None) };
+                return Err(crate::gpu::GpuError::Vk { call: "vkCreateComputePipelines", result: e });
+            }
+        };
+        ctx.name_object(raw, name);
+        Ok(Pipeline { ctx: ctx.clone(), raw, layout, bind_point: vk::PipelineBindPoint::COMPUTE })
+    }
+
+    pub fn graphics(
+        ctx: &Arc<Context>,
+        name: &str,
+        desc: &GraphicsDesc,
+        set_layouts: &[vk::DescriptorSetLayout],
+        push_size: u32,
+    ) -> GpuResult<Pipeline> {
+        let d = &ctx.device;
+        let mut modules = vec![(vk::ShaderStageFlags::VERTEX, shader_module(ctx, name, desc.vert)?)];
+        if let Some(g) = desc.geom {
+            modules.push((vk::ShaderStageFlags::GEOMETRY, shader_module(ctx, name, g)?));
+        }
+        if let Some(f) = desc.frag {
+            modules.push((vk::ShaderStageFlags::FRAGMENT, shader_module(ctx, name, f)?));
+        }
+        let destroy_modules = |mods: &[(vk::ShaderStageFlags, vk::ShaderModule)]| unsafe {
+            for (_, m) in mods {
+                d.destroy_shader_module(*m, None);
+            }
+        };
+        let layout = match pipeline_layout(ctx, name, set_layouts, push_size) {
+            Ok(l) => l,
+            Err(e) => {
+                destroy_modules(&modules);
+                return Err(e);
+            }
+        };
+        let spec = Spec::new(desc.spec);
+        let spec_info = spec.info();
+        let stages: Vec<_> = modules
+            .iter()
+            .map(|(s, m)| {
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(*s)
+                    .module(*m)
+                    .name(c"main")
+                    .specialization_info(&spec_info)
+            })
+            .collect();
+        let bindings = [vk::VertexInputBindingDescription {
+            binding: 0,
+            stride: std::mem::size_of::<crate::render::scene_gpu::Vertex>() as u32,
+            input_rate: vk::VertexInputRate::VERTEX,
+        }];
+        let attributes = [
+            vk::VertexInputAttributeDescription {
+                location: 0,
+                binding: 0,
+                format: vk::Format::R32G32B32_SFLOAT,
+                offset: 0,
+            },
+            vk::VertexInputAttributeDescription {
+                location: 1,
+                binding: 0,
+                format: vk::Format::R32G32B32_SFLOAT,
+                offset: 12,
+            },
+            vk::VertexInputAttributeDescription {
+                location: 2,
+                binding: 0,
+                format: vk::Format::R32G32_SFLOAT,
+                offset: 24,
+            },
+        ];
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(&bindings)
+            .vertex_attribute_descriptions(&attributes[..desc.vertex_attributes.clamp(1, 3)]);
+        let input_assembly =
+            vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(desc.cull)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .depth_bias_enable(desc.depth_bias)
+            .depth_clamp_enable(desc.depth_clamp && ctx.info.optional.depth_clamp)
+            .line_width(1.0);
+        let multisample =
+            vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(desc.depth_format.is_some() && desc.depth_test)
+            .depth_write_enable(desc.depth_format.is_some() && desc.depth_write)
+            .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
+        let blend_attachments: Vec<_> = desc
+            .color_formats
+            .iter()
+            .map(|_| {
+                vk::PipelineColorBlendAttachmentState::default()
+                    .blend_enable(false)
+                    .color_write_mask(vk::ColorComponentFlags::RGBA)
+            })
+            .collect();
+        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+        let mut dynamic_states = vec![vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        if desc.depth_bias {
+            dynamic_states.push(vk::DynamicState::DEPTH_BIAS);
+        }
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let mut rendering = vk::PipelineRenderingCreateInfo::default()
+            .color_attachment_formats(desc.color_formats)
+            .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED));
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&input_assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(layout)
+            .push_next(&mut rendering);
+        let result = unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) };
+        destroy_modules(&modules);
+        let raw = match result {
+            Ok(p) => p[0],
+            Err((_, e)) => {
+                unsafe { d.destroy_pipeline_layout(layout, None) };
+                return Err(crate::gpu::GpuError::Vk { call: "vkCreateGraphicsPipelines", result: e });
+            }
+        };
+        ctx.name_object(raw, name);
+        Ok(Pipeline { ctx: ctx.clone(), raw, layout, bind_point: vk::PipelineBindPoint::GRAPHICS })
+    }
+
+    pub fn bind(&self, cmd: vk::CommandBuffer, sets: &[vk::DescriptorSet]) {
+        unsafe {
+            self.ctx.device.cmd_bind_pipeline(cmd, self.bind_point, self.raw);
+            if !sets.is_empty() {
+                self.ctx.device.cmd_bind_descriptor_sets(cmd, self.bind_point, self.layout, 0, sets, &[]);
+            }
+        }
+    }
+
+    pub fn push<T: bytemuck::Pod>(&self, cmd: vk::CommandBuffer, data: &T) {
+        unsafe {
+            self.ctx.device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::ALL, 0, bytemuck::bytes_of(data))
+        };
+    }
+}
+
+pub struct GraphicsDesc<'a> {
+    /// How many of the vertex attributes (position, normal, uv) the vertex shader reads.
+    pub vertex_attributes: usize,
+    pub vert: &'a [u8],
+    pub geom: Option<&'a [u8]>,
+    pub frag: Option<&'a [u8]>,
+    pub color_formats: &'a [vk::Format],
+    pub depth_format: Option<vk::Format>,
+    pub depth_test: bool,
+    pub depth_write: bool,
+    pub cull: vk::CullModeFlags,
+    /// Depth bias set dynamically with `vkCmdSetDepthBias`.
+    pub depth_bias: bool,
+    /// Clamp depth instead of clipping (shadow casters behind a directional light's near plane).
+    pub depth_clamp: bool,
+    pub spec: &'a [(u32, u32)],
+}
+
+/// Workgroup count covering `n` items with groups of `group` (never zero for n > 0:
+/// rounds up, unlike the seed's integer-division bug).
+pub fn group_count(n: u32, group: u32) -> u32 {
+    n.div_ceil(group)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn group_count_rounds_up() {
+        assert_eq!(super::group_count(1, 8), 1);
+        assert_eq!(super::group_count(8, 8), 1);
+        assert_eq!(super::group_count(9, 8), 2);
+        assert_eq!(super::group_count(4, 8), 1);
+    }
+}

@@ -1,0 +1,14 @@
+//! dvsgi: Deferred Voxel Shading — voxel cone traced global illumination over Vulkan.
+//!
+//! Layers, each with one error type: [`scene`] (files -> scene model, `SceneError`),
+//! [`gpu`] (Vulkan context, memory, barriers, pipelines; `GpuError`), [`render`] (passes and
+//! frames over `gpu`), [`output`] (image files; `OutputError`); [`Error`] joins them.
+
+pub mod cli;
+pub mod error;
+pub mod gpu;
+pub mod output;
+pub mod render;
+pub mod scene;
+
+pub use error::{Error, Result};

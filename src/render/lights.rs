@@ -1,0 +1,134 @@
+//! Lights for the GPU (mirrors glsl/include/lights.glsl and shadow.glsl) and their shadow
+//! views: directional = 1 orthographic view fitted to the scene bounds, spot = 1 perspective
+//! view covering the outer cone, point = 6 cube faces (+X, -X, +Y, -Y, +Z, -Z).
+
+use crate::scene::{Aabb, LightKind, Scene};
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug, Default)]
+pub struct GpuLight {
+    pub position: [f32; 4],
+    pub direction: [f32; 4],
+    pub color: [f32; 4],
+    pub cone: [f32; 4],
+    pub shadow: [i32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug, Default)]
+pub struct GpuShadowView {
+    pub view_proj: [[f32; 4]; 4],
+    pub params: [f32; 4],
+}
+
+pub const LIGHT_DIRECTIONAL: f32 = 0.0;
+pub const LIGHT_POINT: f32 = 1.0;
+pub const LIGHT_SPOT: f32 = 2.0;
+
+/// Number of shadow views each light of the scene needs (independent of time).
+pub fn shadow_view_count(scene: &Scene) -> u32 {
+    scene
+        .lights
+        .iter()
+        .filter(|l| l.cast_shadows)
+        .map(|l| match l.kind {
+            LightKind::Point { .. } => 6,
+            _ => 1,
+        })
+        .sum()
+}
+
+fn flip_y(mut p: Mat4) -> Mat4 {
+    p.y_axis.y = -p.y_axis.y;
+    p
+}
+
+/// A look-at that tolerates `dir` parallel to the preferred up vector.
+fn look_dir(eye: Vec3, dir: Vec3) -> Mat4 {
+    let up = if dir.normalize_or_zero().dot(Vec3::Y).abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+    Mat4::look_to_rh(eye, dir, up)
+}
+
+/// The GPU light table and shadow views at time `t`; `bounds` are the scene's world bounds.
+pub fn build(
+    scene: &Scene,
+    t: f32,
+    bounds: Aabb,
+    shadow_map_size: u32,
+    pcf_radius: f32,
+) -> (Vec<GpuLight>, Vec<GpuShadowView>) {
+    let mut lights = Vec::new();
+    let mut views = Vec::new();
+    let (center, radius) = if bounds.is_empty() {
+        (Vec3::ZERO, 1.0)
+    } else {
+        (bounds.center(), (bounds.extent().length() * 0.5).max(1e-3))
+    };
+    let size = shadow_map_size.max(1) as f32;
+    // Widen perspective views slightly so PCF taps near a cube face's edge stay inside it.
+    let margin = (1.0 + 2.0 * (pcf_radius + 1.0) / size).min(1.5);
+    let near_for = |pos: Vec3| {
+        let far = (pos - center).length() + radius;
+        let near = (far * 1e-4).max(1e-4);
+        (near, far.max(near * 2.0))
+    };
+    for light in &scene.lights {
+        let kind = light.at_time(t);
+        let base = views.len() as i32;
+        let mut g = GpuLight::default();
+        match kind {
+            LightKind::Directional { direction, irradiance } => {
+                let dir = direction.normalize_or(Vec3::NEG_Y);
+                g.position = [0.0, 0.0, 0.0, LIGHT_DIRECTIONAL];
+                g.direction = [dir.x, dir.y, dir.z, 0.0];
+                g.color = [irradiance.x, irradiance.y, irradiance.z, 0.0];
+                if light.cast_shadows {
+                    let eye = center - dir * (radius * 2.0);
+                    let view = look_dir(eye, dir);
+                    let proj =
+                        flip_y(Mat4::orthographic_rh(-radius, radius, -radius, radius, radius * 0.5, radius * 3.5));
+                    views.push(GpuShadowView {
+                        view_proj: (proj * view).to_cols_array_2d(),
+                        params: [2.0 * radius / size, 1.0, 0.0, 0.0],
+                    });
+                }
+            }
+            LightKind::Point { position, intensity } => {
+                g.position = [position.x, position.y, position.z, LIGHT_POINT];
+                g.color = [intensity.x, intensity.y, intensity.z, 0.0];
+                if light.cast_shadows {
+                    let (near, far) = near_for(position);
+                    let fov = 2.0 * margin.atan();
+                    let proj = flip_y(Mat4::perspective_rh(fov, 1.0, near, far));
+                    for dir in [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z] {
+                        views.push(GpuShadowView {
+                            view_proj: (proj * look_dir(position, dir)).to_cols_array_2d(),
+                            params: [2.0 * margin / size, 0.0, 0.0, 0.0],
+                        });
+                    }
+                }
+            }
+            LightKind::Spot { position, direction, intensity, inner_deg, outer_deg } => {
+                let dir = direction.normalize_or(Vec3::NEG_Y);
+                g.position = [position.x, position.y, position.z, LIGHT_SPOT];
+                g.direction = [dir.x, dir.y, dir.z, 0.0];
+                g.color = [intensity.x, intensity.y, intensity.z, 0.0];
+                g.cone = [inner_deg.to_radians().cos(), outer_deg.to_radians().cos(), 0.0, 0.0];
+                if light.cast_shadows {
+                    let (near, far) = near_for(position);
+                    let half = (outer_deg.to_radians().tan() * margin).atan().min(89.0f32.to_radians());
+                    let proj = flip_y(Mat4::perspective_rh(2.0 * half, 1.0, near, far));
+                    views.push(GpuShadowView {
+                        view_proj: (proj * look_dir(position, dir)).to_cols_array_2d(),
+                        params: [2.0 * half.tan() / size, 0.0, 0.0, 0.0],
+                    });
+                }
+            }
+        }
+        g.shadow = if light.cast_shadows { [base, views.len() as i32 - base, 0, 0] } else { [-1, 0, 0, 0] };
+        lights.push(g);
+    }
+    (lights, views)
+}

@@ -1,0 +1,28 @@
+//! One module per pass; each declares what it reads and writes (`Pass::uses`).
+
+pub mod gbuffer;
+pub mod lighting;
+pub mod readback;
+pub mod shadow;
+pub mod tonemap;
+
+use crate::gpu::Context;
+use ash::vk;
+
+pub(crate) fn set_viewport(ctx: &Context, cmd: vk::CommandBuffer, extent: vk::Extent2D) {
+    unsafe {
+        ctx.device.cmd_set_viewport(
+            cmd,
+            0,
+            &[vk::Viewport {
+                x: 0.0,
+                y: 0.0,
+                width: extent.width as f32,
+                height: extent.height as f32,
+                min_depth: 0.0,
+                max_depth: 1.0,
+            }],
+        );
+        ctx.device.cmd_set_scissor(cmd, 0, &[vk::Rect2D { offset: vk::Offset2D::default(), extent }]);
+    }
+}

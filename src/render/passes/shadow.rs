@@ -1,0 +1,91 @@
+//! Shadow maps: depth-only renders of the scene, one per shadow view, into the layers of
+//! one depth array. Runs only when the scene has a light that casts shadows.
+
+use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, GraphicsDesc, Image, Pipeline};
+use crate::render::graph::{Pass, Use};
+use crate::render::scene_gpu::SceneGpu;
+use crate::render::FrameBuffers;
+use ash::vk;
+use std::sync::Arc;
+
+pub struct ShadowPass {
+    pub atlas: Arc<Image>,
+    scene: Arc<SceneGpu>,
+    pipeline: Pipeline,
+    set: DescriptorSet,
+    views: u32,
+}
+
+impl ShadowPass {
+    pub fn new(
+        ctx: &Arc<Context>,
+        scene: &Arc<SceneGpu>,
+        frame: &FrameBuffers,
+        atlas: &Arc<Image>,
+        views: u32,
+    ) -> GpuResult<Self> {
+        let set = DescriptorSet::new(
+            ctx,
+            "shadow",
+            vk::ShaderStageFlags::VERTEX,
+            &[Bind::Storage(&scene.instances), Bind::Storage(&frame.shadow_views)],
+        )?;
+        let pipeline = Pipeline::graphics(
+            ctx,
+            "shadow",
+            &GraphicsDesc {
+                vertex_attributes: 1,
+                vert: shaders::SHADOW_VERT,
+                geom: None,
+                frag: None,
+                color_formats: &[],
+                depth_format: Some(atlas.desc.format),
+                depth_test: true,
+                depth_write: true,
+                cull: vk::CullModeFlags::NONE,
+                depth_bias: true,
+                depth_clamp: true,
+                spec: &[],
+            },
+            &[set.layout],
+            4,
+        )?;
+        Ok(ShadowPass { atlas: atlas.clone(), scene: scene.clone(), pipeline, set, views })
+    }
+}
+
+impl Pass for ShadowPass {
+    fn name(&self) -> &str {
+        "shadow maps"
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        vec![Use::write_image(&self.atlas, Access::DepthAttachmentWrite)]
+    }
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        let extent = self.atlas.extent2d();
+        let d = &ctx.device;
+        for view in 0..self.views {
+            let depth = vk::RenderingAttachmentInfo::default()
+                .image_view(self.atlas.layer_views[view as usize])
+                .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::STORE)
+                .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
+            let info = vk::RenderingInfo::default()
+                .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
+                .layer_count(1)
+                .depth_attachment(&depth);
+            unsafe {
+                d.cmd_begin_rendering(cmd, &info);
+                self.pipeline.bind(cmd, &[self.set.set]);
+                super::set_viewport(ctx, cmd, extent);
+                // Constant and slope-scaled bias against acne; the lighting pass adds a
+                // normal offset (shadow_normal_bias).
+                d.cmd_set_depth_bias(cmd, 1.0, 0.0, 1.5);
+                self.pipeline.push(cmd, &view);
+                self.scene.draw_all(ctx, cmd);
+                d.cmd_end_rendering(cmd);
+            }
+        }
+    }
+}

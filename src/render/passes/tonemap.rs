@@ -1,0 +1,52 @@
+//! Display transform (compute): radiance * 2^EV -> tone map -> sRGB 8-bit.
+
+use crate::gpu::pipeline::group_count;
+use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline};
+use crate::render::graph::{Pass, Use};
+use crate::render::FrameBuffers;
+use ash::vk;
+use std::sync::Arc;
+
+pub const DISPLAY_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
+
+pub struct TonemapPass {
+    radiance: Arc<Image>,
+    pub display: Arc<Image>,
+    pipeline: Pipeline,
+    set: DescriptorSet,
+}
+
+impl TonemapPass {
+    pub fn new(
+        ctx: &Arc<Context>,
+        frame: &FrameBuffers,
+        radiance: &Arc<Image>,
+        display: &Arc<Image>,
+    ) -> GpuResult<Self> {
+        let set = DescriptorSet::new(
+            ctx,
+            "tonemap",
+            vk::ShaderStageFlags::COMPUTE,
+            &[Bind::Uniform(&frame.uniforms), Bind::StorageImage(radiance.view), Bind::StorageImage(display.view)],
+        )?;
+        let pipeline = Pipeline::compute(ctx, "tonemap", shaders::TONEMAP_COMP, &[set.layout], 0, &[])?;
+        Ok(TonemapPass { radiance: radiance.clone(), display: display.clone(), pipeline, set })
+    }
+}
+
+impl Pass for TonemapPass {
+    fn name(&self) -> &str {
+        "tonemap"
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        vec![
+            Use::read_image(&self.radiance, Access::ComputeShaderReadStorage),
+            Use::write_image(&self.display, Access::ComputeShaderWrite),
+        ]
+    }
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        let e = self.display.extent2d();
+        self.pipeline.bind(cmd, &[self.set.set]);
+        unsafe { ctx.device.cmd_dispatch(cmd, group_count(e.width, 8), group_count(e.height, 8), 1) };
+    }
+}

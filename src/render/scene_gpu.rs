@@ -1,0 +1,302 @@
+//! The scene on the GPU: one vertex and index buffer for all meshes, a material table,
+//! textures, and a per-draw instance table (model and normal matrix, material) rewritten
+//! each frame for moving objects.
+
+use crate::gpu::sync::{barrier, Access};
+use crate::gpu::{Buffer, Context, GpuResult, Image, ImageDesc, Sampler};
+use crate::scene::Scene;
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec4};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub uv: [f32; 2],
+}
+
+/// Mirrors `Material` in glsl/include/scene.glsl (std430).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug)]
+pub struct GpuMaterial {
+    /// rgb albedo, a unused
+    pub albedo: [f32; 4],
+    /// rgb Ks, a shininess exponent
+    pub specular: [f32; 4],
+    /// rgb emitted radiance
+    pub emission: [f32; 4],
+    /// x albedo texture index or -1
+    pub texture: [i32; 4],
+}
+
+/// Mirrors `Instance` in glsl/include/scene.glsl (std430).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug)]
+pub struct GpuInstance {
+    pub model: [[f32; 4]; 4],
+    pub normal: [[f32; 4]; 4],
+    /// x material index
+    pub material: [u32; 4],
+}
+
+/// One indexed draw: a mesh of an object.
+#[derive(Debug, Clone, Copy)]
+pub struct Draw {
+    pub first_index: u32,
+    pub index_count: u32,
+    pub vertex_offset: i32,
+    /// Index into the instance table (passed as firstInstance).
+    pub instance: u32,
+    pub object: usize,
+    pub material: u32,
+}
+
+pub struct SceneGpu {
+    pub vertices: Buffer,
+    pub indices: Buffer,
+    pub materials: Buffer,
+    pub instances: Buffer,
+    pub textures: Vec<Image>,
+    /// Bound when the scene has no textures (descriptor arrays cannot be empty).
+    pub placeholder_texture: Option<Image>,
+    pub texture_sampler: Sampler,
+    pub draws: Vec<Draw>,
+}
+
+/// Upload `data` into a new device-local buffer (load time only: waits for the copy).
+pub fn upload_buffer(ctx: &Arc<Context>, name: &str, data: &[u8], usage: vk::BufferUsageFlags) -> GpuResult<Buffer> {
+    let size = data.len().max(4) as u64;
+    let staging = Buffer::new(
+        ctx,
+        &format!("{name} staging"),
+        size,
+        vk::BufferUsageFlags::TRANSFER_SRC,
+        MemoryLocation::CpuToGpu,
+    )?;
+    staging.write(0, data);
+    let buffer = Buffer::new(ctx, name, size, usage | vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuOnly)?;
+    ctx.one_shot(&format!("upload {name}"), |cmd| unsafe {
+        if !data.is_empty() {
+            ctx.device.cmd_copy_buffer(
+                cmd,
+                staging.raw,
+                buffer.raw,
+                &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size: data.len() as u64 }],
+            );
+        }
+        // Make the copy visible to every later read of this immutable buffer.
+        let b = vk::MemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::COPY)
+            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .dst_access_mask(vk::AccessFlags2::MEMORY_READ);
+        ctx.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&[b]));
+    })?;
+    Ok(buffer)
+}
+
+/// Upload an sRGB RGBA8 texture, left in SHADER_READ_ONLY_OPTIMAL for sampling anywhere.
+pub fn upload_texture(ctx: &Arc<Context>, name: &str, width: u32, height: u32, rgba8: &[u8]) -> GpuResult<Image> {
+    let image = Image::new(
+        ctx,
+        name,
+        ImageDesc::d2(
+            vk::Format::R8G8B8A8_SRGB,
+            width,
+            height,
+            vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+        ),
+    )?;
+    let staging = Buffer::new(
+        ctx,
+        &format!("{name} staging"),
+        rgba8.len() as u64,
+        vk::BufferUsageFlags::TRANSFER_SRC,
+        MemoryLocation::CpuToGpu,
+    )?;
+    staging.write(0, rgba8);
+    let range = image.desc.full_range();
+    ctx.one_shot(&format!("upload {name}"), |cmd| unsafe {
+        let to_dst = barrier(&[Access::Nothing], &[Access::TransferWrite], true, true).unwrap();
+        ctx.device.cmd_pipeline_barrier2(
+            cmd,
+            &vk::DependencyInfo::default().image_memory_barriers(&[to_dst.image(image.raw, range)]),
+        );
+        ctx.device.cmd_copy_buffer_to_image(
+            cmd,
+            staging.raw,
+            image.raw,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            &[vk::BufferImageCopy {
+                buffer_offset: 0,
+                buffer_row_length: 0,
+                buffer_image_height: 0,
+                image_subresource: vk::ImageSubresourceLayers {
+                    aspect_mask: vk::ImageAspectFlags::COLOR,
+                    mip_level: 0,
+                    base_array_layer: 0,
+                    layer_count: 1,
+                },
+                image_offset: vk::Offset3D::default(),
+                image_extent: image.desc.extent,
+            }],
+        );
+        let to_read = barrier(
+            &[Access::TransferWrite],
+            &[Access::FragmentShaderReadSampled, Access::ComputeShaderReadSampled],
+            true,
+            false,
+        )
+        .unwrap();
+        ctx.device.cmd_pipeline_barrier2(
+            cmd,
+            &vk::DependencyInfo::default().image_memory_barriers(&[to_read.image(image.raw, range)]),
+        );
+    })?;
+    Ok(image)
+}
+
+fn mat_cols(m: Mat4) -> [[f32; 4]; 4] {
+    m.to_cols_array_2d()
+}
+
+impl SceneGpu {
+    pub fn new(ctx: &Arc<Context>, scene: &Scene) -> GpuResult<SceneGpu> {
+        let mut vertices: Vec<Vertex> = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        let mut draws = Vec::new();
+        for (oi, object) in scene.objects.iter().enumerate() {
+            for &mi in &object.meshes {
+                let mesh = &scene.meshes[mi as usize];
+                if mesh.indices.is_empty() {
+                    continue;
+                }
+                let base = vertices.len() as i32;
+                for i in 0..mesh.positions.len() {
+                    vertices.push(Vertex {
+                        position: mesh.positions[i].to_array(),
+                        normal: mesh.normals.get(i).copied().unwrap_or(glam::Vec3::Y).to_array(),
+                        uv: mesh.uvs.get(i).copied().unwrap_or(glam::Vec2::ZERO).to_array(),
+                    });
+                }
+                draws.push(Draw {
+                    first_index: indices.len() as u32,
+                    index_count: mesh.indices.len() as u32,
+                    vertex_offset: base,
+                    instance: draws.len() as u32,
+                    object: oi,
+                    material: mesh.material,
+                });
+                indices.extend_from_slice(&mesh.indices);
+            }
+        }
+        let vertex_buffer = upload_buffer(
+            ctx,
+            "scene vertices",
+            bytemuck::cast_slice(&vertices),
+            vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let index_buffer = upload_buffer(
+            ctx,
+            "scene indices",
+            bytemuck::cast_slice(&indices),
+            vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let materials: Vec<GpuMaterial> = scene
+            .materials
+            .iter()
+            .map(|m| GpuMaterial {
+                albedo: Vec4::from((m.albedo, 1.0)).to_array(),
+                specular: Vec4::from((m.specular, m.shininess)).to_array(),
+                emission: Vec4::from((m.emission, 0.0)).to_array(),
+                texture: [m.albedo_texture.map(|t| t as i32).unwrap_or(-1), 0, 0, 0],
+            })
+            .collect();
+        let material_buffer = upload_buffer(
+            ctx,
+            "scene materials",
+            bytemuck::cast_slice(&materials),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let instances = Buffer::new(
+            ctx,
+            "scene instances",
+            (draws.len().max(1) * std::mem::size_of::<GpuInstance>()) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let mut textures = Vec::new();
+        for (i, t) in scene.textures.iter().enumerate() {
+            let name = format!("texture {i} ({})", t.path.display());
+            textures.push(upload_texture(ctx, &name, t.width, t.height, &t.rgba8)?);
+        }
+        let placeholder_texture = if textures.is_empty() {
+            Some(upload_texture(ctx, "placeholder texture", 1, 1, &[255, 255, 255, 255])?)
+        } else {
+            None
+        };
+        let texture_sampler = Sampler::new(
+            ctx,
+            "texture sampler",
+            &vk::SamplerCreateInfo::default()
+                .mag_filter(vk::Filter::LINEAR)
+                .min_filter(vk::Filter::LINEAR)
+                .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+                .address_mode_u(vk::SamplerAddressMode::REPEAT)
+                .address_mode_v(vk::SamplerAddressMode::REPEAT)
+                .address_mode_w(vk::SamplerAddressMode::REPEAT)
+                .max_lod(vk::LOD_CLAMP_NONE),
+        )?;
+        let me = SceneGpu {
+            vertices: vertex_buffer,
+            indices: index_buffer,
+            materials: material_buffer,
+            instances,
+            textures,
+            placeholder_texture,
+            texture_sampler,
+            draws,
+        };
+        me.update(scene, scene.settings.time);
+        Ok(me)
+    }
+
+    /// Write the instance table for time `t` (host-visible; call before submitting the frame).
+    pub fn update(&self, scene: &Scene, t: f32) {
+        let data: Vec<GpuInstance> = self
+            .draws
+            .iter()
+            .map(|d| {
+                let object = &scene.objects[d.object];
+                let model = object.model_matrix(t);
+                let normal = Mat4::from_mat3(glam::Mat3::from_mat4(model).inverse().transpose());
+                GpuInstance { model: mat_cols(model), normal: mat_cols(normal), material: [d.material, 0, 0, 0] }
+            })
+            .collect();
+        self.instances.write_pod(&data);
+    }
+
+    /// Views for the texture descriptor array (never empty).
+    pub fn texture_views(&self) -> Vec<vk::ImageView> {
+        if let Some(p) = &self.placeholder_texture {
+            vec![p.view]
+        } else {
+            self.textures.iter().map(|t| t.view).collect()
+        }
+    }
+
+    /// Bind the vertex and index buffers and issue every draw.
+    pub fn draw_all(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        unsafe {
+            ctx.device.cmd_bind_vertex_buffers(cmd, 0, &[self.vertices.raw], &[0]);
+            ctx.device.cmd_bind_index_buffer(cmd, self.indices.raw, 0, vk::IndexType::UINT32);
+            for d in &self.draws {
+                ctx.device.cmd_draw_indexed(cmd, d.index_count, 1, d.first_index, d.vertex_offset, d.instance);
+            }
+        }
+    }
+}

@@ -1,0 +1,989 @@
+//! The TOML scene-file schema (see `scenes/FORMAT.md`), `--set` overrides, and the
+//! conversion of a parsed file into a validated [`Scene`].
+
+use super::error::SceneError;
+use super::obj::{self, ObjData};
+use super::types::*;
+use super::LoadOptions;
+use glam::{Mat4, Vec3};
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+
+// ---------------------------------------------------------------------------------------------
+// Schema
+// ---------------------------------------------------------------------------------------------
+
+fn zero3() -> [f32; 3] {
+    [0.0; 3]
+}
+fn up3() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+fn default_albedo() -> [f32; 3] {
+    [0.8; 3]
+}
+fn one() -> f32 {
+    1.0
+}
+fn yes() -> bool {
+    true
+}
+fn default_fov() -> f32 {
+    45.0
+}
+fn default_near() -> f32 {
+    0.01
+}
+fn default_far() -> f32 {
+    1000.0
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SceneFile {
+    #[serde(default)]
+    pub scene: SceneSection,
+    pub camera: CameraDef,
+    #[serde(default)]
+    pub render: RenderDef,
+    #[serde(default)]
+    pub materials: Vec<MaterialDef>,
+    #[serde(default)]
+    pub objects: Vec<ObjectDef>,
+    #[serde(default)]
+    pub lights: Vec<LightDef>,
+}
+
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SceneSection {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    #[serde(default)]
+    pub search_paths: Vec<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bounds: Option<BoundsDef>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct BoundsDef {
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct CameraDef {
+    pub position: [f32; 3],
+    pub target: [f32; 3],
+    #[serde(default = "up3")]
+    pub up: [f32; 3],
+    #[serde(default = "default_fov")]
+    pub fov_y: f32,
+    #[serde(default = "default_near")]
+    pub near: f32,
+    #[serde(default = "default_far")]
+    pub far: f32,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct RenderDef {
+    pub width: u32,
+    pub height: u32,
+    pub time: f32,
+    pub exposure: f32,
+    pub tonemap: ToneMap,
+    pub shadow_map_size: u32,
+    pub shadow_filter_radius: f32,
+    pub shadow_normal_bias: f32,
+}
+
+impl Default for RenderDef {
+    fn default() -> Self {
+        let d = RenderSettings::default();
+        RenderDef {
+            width: d.width,
+            height: d.height,
+            time: d.time,
+            exposure: d.exposure,
+            tonemap: d.tonemap,
+            shadow_map_size: d.shadow_map_size,
+            shadow_filter_radius: d.shadow_filter_radius,
+            shadow_normal_bias: d.shadow_normal_bias,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MaterialDef {
+    pub name: String,
+    #[serde(default = "default_albedo")]
+    pub albedo: [f32; 3],
+    #[serde(default = "zero3")]
+    pub specular: [f32; 3],
+    #[serde(default = "one")]
+    pub shininess: f32,
+    #[serde(default = "zero3")]
+    pub emission: [f32; 3],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub albedo_texture: Option<String>,
+}
+
+/// `scale = 2.0` or `scale = [sx, sy, sz]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Scale {
+    Uniform(f32),
+    PerAxis([f32; 3]),
+}
+
+impl Default for Scale {
+    fn default() -> Self {
+        Scale::Uniform(1.0)
+    }
+}
+
+impl Scale {
+    fn vec(self) -> Vec3 {
+        match self {
+            Scale::Uniform(s) => Vec3::splat(s),
+            Scale::PerAxis(a) => Vec3::from_array(a),
+        }
+    }
+}
+
+impl Serialize for Scale {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Scale::Uniform(x) => s.serialize_f32(*x),
+            Scale::PerAxis(a) => a.serialize(s),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Scale {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Scale;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number or an array of 3 numbers [sx, sy, sz]")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<Scale, E> {
+                Ok(Scale::Uniform(v as f32))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<Scale, E> {
+                Ok(Scale::Uniform(v as f32))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<Scale, E> {
+                Ok(Scale::Uniform(v as f32))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Scale, A::Error> {
+                let mut a = [0.0f32; 3];
+                for (k, slot) in a.iter_mut().enumerate() {
+                    *slot = seq.next_element()?.ok_or_else(|| serde::de::Error::invalid_length(k, &self))?;
+                }
+                if seq.next_element::<f32>()?.is_some() {
+                    return Err(serde::de::Error::invalid_length(4, &self));
+                }
+                Ok(Scale::PerAxis(a))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ObjectDef {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    pub obj: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
+    #[serde(default)]
+    pub materials: BTreeMap<String, String>,
+    #[serde(default = "zero3")]
+    pub translate: [f32; 3],
+    #[serde(default = "zero3")]
+    pub rotate: [f32; 3],
+    #[serde(default)]
+    pub scale: Scale,
+    #[serde(default)]
+    pub dynamic: bool,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motion: Option<MotionDef>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub keyframes: Option<Vec<KeyframeDef>>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct MotionDef {
+    pub axis: [f32; 3],
+    pub pivot: [f32; 3],
+    pub degrees_per_second: f32,
+    pub velocity: [f32; 3],
+    pub amplitude: [f32; 3],
+    pub period: f32,
+}
+
+impl Default for MotionDef {
+    fn default() -> Self {
+        MotionDef {
+            axis: up3(),
+            pivot: zero3(),
+            degrees_per_second: 0.0,
+            velocity: zero3(),
+            amplitude: zero3(),
+            period: 0.0,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct KeyframeDef {
+    pub time: f32,
+    #[serde(default = "zero3")]
+    pub translate: [f32; 3],
+    #[serde(default = "zero3")]
+    pub rotate: [f32; 3],
+    #[serde(default)]
+    pub scale: Scale,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct LightDef {
+    #[serde(rename = "type")]
+    pub kind: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f32; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub intensity: Option<[f32; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction: Option<[f32; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub irradiance: Option<[f32; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inner_angle: Option<f32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub outer_angle: Option<f32>,
+    #[serde(default = "yes")]
+    pub cast_shadows: bool,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motion: Option<MotionDef>,
+}
+
+// The keys of each table, for `--set` (keys that are optional may be absent from the
+// serialized tree but can still be set). A unit test checks these against the structs.
+pub(crate) const TOP_KEYS: &[&str] = &["scene", "camera", "render", "materials", "objects", "lights"];
+pub(crate) const SCENE_KEYS: &[&str] = &["name", "search_paths", "bounds"];
+pub(crate) const BOUNDS_KEYS: &[&str] = &["min", "max"];
+pub(crate) const CAMERA_KEYS: &[&str] = &["position", "target", "up", "fov_y", "near", "far"];
+pub(crate) const RENDER_KEYS: &[&str] = &[
+    "width",
+    "height",
+    "time",
+    "exposure",
+    "tonemap",
+    "shadow_map_size",
+    "shadow_filter_radius",
+    "shadow_normal_bias",
+];
+pub(crate) const MATERIAL_KEYS: &[&str] = &["name", "albedo", "specular", "shininess", "emission", "albedo_texture"];
+pub(crate) const OBJECT_KEYS: &[&str] =
+    &["name", "obj", "material", "materials", "translate", "rotate", "scale", "dynamic", "motion", "keyframes"];
+pub(crate) const MOTION_KEYS: &[&str] = &["axis", "pivot", "degrees_per_second", "velocity", "amplitude", "period"];
+pub(crate) const KEYFRAME_KEYS: &[&str] = &["time", "translate", "rotate", "scale"];
+pub(crate) const LIGHT_KEYS: &[&str] = &[
+    "type",
+    "name",
+    "position",
+    "intensity",
+    "direction",
+    "irradiance",
+    "inner_angle",
+    "outer_angle",
+    "cast_shadows",
+    "motion",
+];
+
+/// What a table at a (normalised, `#` for indices) dotted path may contain.
+enum TableSchema {
+    Keys(&'static [&'static str]),
+    /// Any key (the per-group `materials` map).
+    Free,
+}
+
+fn table_schema(norm: &str) -> Option<TableSchema> {
+    Some(TableSchema::Keys(match norm {
+        "" => TOP_KEYS,
+        "scene" => SCENE_KEYS,
+        "scene.bounds" => BOUNDS_KEYS,
+        "camera" => CAMERA_KEYS,
+        "render" => RENDER_KEYS,
+        "materials.#" => MATERIAL_KEYS,
+        "objects.#" => OBJECT_KEYS,
+        "objects.#.motion" | "lights.#.motion" => MOTION_KEYS,
+        "objects.#.keyframes.#" => KEYFRAME_KEYS,
+        "lights.#" => LIGHT_KEYS,
+        "objects.#.materials" => return Some(TableSchema::Free),
+        _ => return None,
+    }))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parsing and overrides
+// ---------------------------------------------------------------------------------------------
+
+/// Parses the scene text; with overrides, round-trips through a `toml::Value` tree with all
+/// defaults filled in, patches it, and deserializes again.
+pub(crate) fn parse(path: &Path, text: &str, overrides: &[(String, String)]) -> Result<SceneFile, SceneError> {
+    let file: SceneFile = toml::from_str(text)
+        .map_err(|e| SceneError::Toml { path: path.to_path_buf(), message: e.to_string().trim_end().to_owned() })?;
+    if overrides.is_empty() {
+        return Ok(file);
+    }
+    let mut tree = toml::Value::try_from(&file).map_err(|e| SceneError::Toml {
+        path: path.to_path_buf(),
+        message: format!("internal error serializing the scene for --set: {e}"),
+    })?;
+    for (key, value) in overrides {
+        apply_override(&mut tree, path, key, parse_value(value))?;
+    }
+    tree.try_into().map_err(|e: toml::de::Error| {
+        let list = overrides.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" ");
+        SceneError::Toml {
+            path: path.to_path_buf(),
+            message: format!("after applying --set {list}: {}", e.to_string().trim_end()),
+        }
+    })
+}
+
+/// A `--set` value: TOML syntax (`45`, `[1,2,3]`, `true`, `"x"`), else the raw string.
+pub(crate) fn parse_value(s: &str) -> toml::Value {
+    toml::from_str::<toml::Table>(&format!("v = {s}"))
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(s.to_owned()))
+}
+
+fn apply_override(root: &mut toml::Value, path: &Path, key: &str, value: toml::Value) -> Result<(), SceneError> {
+    let segs: Vec<&str> = key.split('.').map(str::trim).collect();
+    if segs.iter().any(|s| s.is_empty()) {
+        return Err(SceneError::BadOverride {
+            arg: key.to_owned(),
+            message: "empty component in the dotted key (expected e.g. camera.fov_y or lights.0.intensity)".into(),
+        });
+    }
+    let unknown = |done: &[&str], message: String, valid: Vec<String>| SceneError::UnknownKey {
+        path: path.to_path_buf(),
+        key: key.to_owned(),
+        at: if done.is_empty() { "<top level>".to_owned() } else { done.join(".") },
+        message,
+        valid,
+    };
+    let mut value = Some(value);
+    let mut cur = root;
+    let mut norm: Vec<&str> = Vec::new();
+    for (i, seg) in segs.iter().copied().enumerate() {
+        let done = &segs[..i];
+        let last = i + 1 == segs.len();
+        match cur {
+            toml::Value::Table(t) => {
+                let schema = table_schema(&norm.join("."));
+                let valid: Vec<String> = match &schema {
+                    Some(TableSchema::Keys(k)) => k.iter().map(|s| s.to_string()).collect(),
+                    _ => t.keys().cloned().collect(),
+                };
+                if !t.contains_key(seg) {
+                    let allowed = match &schema {
+                        Some(TableSchema::Keys(k)) => k.contains(&seg),
+                        Some(TableSchema::Free) => true,
+                        None => false,
+                    };
+                    if !allowed {
+                        return Err(unknown(done, format!("no key `{seg}`"), valid));
+                    }
+                    if !last {
+                        let mut child = norm.clone();
+                        child.push(seg);
+                        if table_schema(&child.join(".")).is_some() {
+                            t.insert(seg.to_owned(), toml::Value::Table(toml::Table::new()));
+                        } else {
+                            return Err(unknown(
+                                done,
+                                format!(
+                                    "`{seg}` is not set in the scene file, so nothing inside it can be set; set `{}` as a whole instead",
+                                    segs[..=i].join(".")
+                                ),
+                                valid,
+                            ));
+                        }
+                    }
+                }
+                if last {
+                    if let Some(v) = value.take() {
+                        t.insert(seg.to_owned(), v);
+                    }
+                    return Ok(());
+                }
+                norm.push(seg);
+                match t.get_mut(seg) {
+                    Some(next) => cur = next,
+                    None => return Err(unknown(done, format!("no key `{seg}`"), valid)),
+                }
+            }
+            toml::Value::Array(a) => {
+                let len = a.len();
+                let valid: Vec<String> = (0..len).map(|k| k.to_string()).collect();
+                let Ok(idx) = seg.parse::<usize>() else {
+                    return Err(unknown(
+                        done,
+                        format!("`{}` is a list; expected an index, found `{seg}`", done.join(".")),
+                        valid,
+                    ));
+                };
+                let Some(slot) = a.get_mut(idx) else {
+                    return Err(unknown(
+                        done,
+                        format!(
+                            "index {idx} is out of range (the list has {len} {})",
+                            if len == 1 { "entry" } else { "entries" }
+                        ),
+                        valid,
+                    ));
+                };
+                if last {
+                    if let Some(v) = value.take() {
+                        *slot = v;
+                    }
+                    return Ok(());
+                }
+                norm.push("#");
+                cur = slot;
+            }
+            _ => {
+                return Err(unknown(
+                    done,
+                    format!("`{}` is a value, not a table, so it has no `{seg}`", done.join(".")),
+                    Vec::new(),
+                ))
+            }
+        }
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------
+// Validation and conversion
+// ---------------------------------------------------------------------------------------------
+
+struct Ctx<'a> {
+    path: &'a Path,
+    dir: PathBuf,
+    opts: &'a LoadOptions,
+    search_paths: Vec<PathBuf>,
+}
+
+impl Ctx<'_> {
+    fn invalid(&self, key: impl Into<String>, message: impl Into<String>) -> SceneError {
+        SceneError::InvalidValue { path: self.path.to_path_buf(), key: key.into(), message: message.into() }
+    }
+
+    fn finite(&self, key: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+        let v = Vec3::from_array(v);
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.invalid(key, format!("{v} is not finite")))
+        }
+    }
+
+    fn color(&self, key: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+        let c = self.finite(key, v)?;
+        if c.min_element() < 0.0 {
+            return Err(self.invalid(key, format!("{c}: colour components must be >= 0")));
+        }
+        Ok(c)
+    }
+
+    fn scalar(&self, key: &str, v: f32) -> Result<f32, SceneError> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.invalid(key, format!("{v} is not finite")))
+        }
+    }
+
+    fn scale(&self, key: &str, s: Scale) -> Result<Vec3, SceneError> {
+        let v = self.finite(
+            key,
+            match s {
+                Scale::Uniform(x) => [x; 3],
+                Scale::PerAxis(a) => a,
+            },
+        )?;
+        if v.cmpeq(Vec3::ZERO).any() {
+            return Err(self.invalid(key, "scale must not be zero"));
+        }
+        Ok(s.vec())
+    }
+
+    /// Relative asset names: the scene file's directory, then each `--asset-path` /
+    /// `DVSGI_ASSET_PATH` directory, then each `[scene] search_paths` entry.
+    fn resolve(&self, name: &str) -> Result<PathBuf, SceneError> {
+        let p = Path::new(name);
+        let cands: Vec<PathBuf> = if p.is_absolute() {
+            vec![p.to_path_buf()]
+        } else {
+            std::iter::once(self.dir.join(p))
+                .chain(self.opts.asset_paths.iter().map(|d| d.join(p)))
+                .chain(self.search_paths.iter().map(|d| d.join(p)))
+                .collect()
+        };
+        let mut tried: Vec<PathBuf> = Vec::new();
+        for c in cands {
+            if c.is_file() {
+                return Ok(c);
+            }
+            if !tried.contains(&c) {
+                tried.push(c);
+            }
+        }
+        Err(SceneError::AssetNotFound { scene_path: self.path.to_path_buf(), name: name.to_owned(), tried })
+    }
+
+    fn motion(&self, key: &str, m: &MotionDef) -> Result<Motion, SceneError> {
+        let axis = self.finite(&format!("{key}.axis"), m.axis)?;
+        let dps = self.scalar(&format!("{key}.degrees_per_second"), m.degrees_per_second)?;
+        if dps != 0.0 && axis.length_squared() == 0.0 {
+            return Err(
+                self.invalid(format!("{key}.axis"), "rotation axis must not be zero when degrees_per_second is set")
+            );
+        }
+        let period = self.scalar(&format!("{key}.period"), m.period)?;
+        if period < 0.0 {
+            return Err(self.invalid(format!("{key}.period"), "period must be >= 0 (0 = no oscillation)"));
+        }
+        Ok(Motion::Parametric {
+            axis: axis.normalize_or_zero(),
+            pivot: self.finite(&format!("{key}.pivot"), m.pivot)?,
+            degrees_per_second: dps,
+            velocity: self.finite(&format!("{key}.velocity"), m.velocity)?,
+            amplitude: self.finite(&format!("{key}.amplitude"), m.amplitude)?,
+            period,
+        })
+    }
+}
+
+fn texture_index(
+    textures: &mut Vec<Texture>,
+    cache: &mut HashMap<PathBuf, u32>,
+    path: &Path,
+    referenced_by: &str,
+) -> Result<u32, SceneError> {
+    if let Some(&i) = cache.get(path) {
+        return Ok(i);
+    }
+    let tex = obj::load_texture(path, referenced_by)?;
+    let i = textures.len() as u32;
+    textures.push(tex);
+    cache.insert(path.to_path_buf(), i);
+    Ok(i)
+}
+
+fn default_material() -> Material {
+    Material {
+        name: "default".to_owned(),
+        albedo: Vec3::splat(0.8),
+        albedo_texture: None,
+        specular: Vec3::ZERO,
+        shininess: 1.0,
+        emission: Vec3::ZERO,
+    }
+}
+
+/// Validates `file` and loads everything it refers to.
+pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<Scene, SceneError> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let ctx = Ctx { path, search_paths: file.scene.search_paths.iter().map(|s| dir.join(s)).collect(), dir, opts };
+
+    // [scene]
+    let name = match &file.scene.name {
+        Some(n) if !n.is_empty() => n.clone(),
+        _ => path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".to_owned()),
+    };
+    let bounds = match &file.scene.bounds {
+        None => None,
+        Some(b) => {
+            let min = ctx.finite("scene.bounds.min", b.min)?;
+            let max = ctx.finite("scene.bounds.max", b.max)?;
+            if min.cmpge(max).any() {
+                return Err(
+                    ctx.invalid("scene.bounds", format!("min {min} must be smaller than max {max} on every axis"))
+                );
+            }
+            Some(Aabb { min, max })
+        }
+    };
+
+    // [camera]
+    let c = &file.camera;
+    let camera = Camera {
+        position: ctx.finite("camera.position", c.position)?,
+        target: ctx.finite("camera.target", c.target)?,
+        up: ctx.finite("camera.up", c.up)?,
+        fov_y_deg: ctx.scalar("camera.fov_y", c.fov_y)?,
+        near: ctx.scalar("camera.near", c.near)?,
+        far: ctx.scalar("camera.far", c.far)?,
+    };
+    if !(camera.fov_y_deg > 0.0 && camera.fov_y_deg < 180.0) {
+        return Err(ctx.invalid(
+            "camera.fov_y",
+            format!("{} is not in (0, 180) degrees (vertical field of view)", camera.fov_y_deg),
+        ));
+    }
+    if camera.near <= 0.0 {
+        return Err(ctx.invalid("camera.near", format!("{} must be > 0", camera.near)));
+    }
+    if camera.far <= camera.near {
+        return Err(ctx.invalid("camera.far", format!("{} must be greater than near ({})", camera.far, camera.near)));
+    }
+    let view_dir = camera.target - camera.position;
+    if view_dir.length_squared() == 0.0 {
+        return Err(ctx.invalid("camera.target", "camera position and target are the same point"));
+    }
+    if view_dir.normalize().cross(camera.up.normalize_or_zero()).length_squared() < 1e-8 {
+        return Err(ctx.invalid("camera.up", format!("up {} is zero or parallel to the view direction", camera.up)));
+    }
+
+    // [render]
+    let r = &file.render;
+    for (key, v) in [("render.width", r.width), ("render.height", r.height)] {
+        if !(1..=16384).contains(&v) {
+            return Err(ctx.invalid(key, format!("{v} is not in 1..=16384")));
+        }
+    }
+    if !(16..=8192).contains(&r.shadow_map_size) {
+        return Err(ctx.invalid("render.shadow_map_size", format!("{} is not in 16..=8192", r.shadow_map_size)));
+    }
+    let settings = RenderSettings {
+        width: r.width,
+        height: r.height,
+        time: ctx.scalar("render.time", r.time)?,
+        exposure: ctx.scalar("render.exposure", r.exposure)?,
+        tonemap: r.tonemap,
+        shadow_map_size: r.shadow_map_size,
+        shadow_filter_radius: ctx.scalar("render.shadow_filter_radius", r.shadow_filter_radius)?,
+        shadow_normal_bias: ctx.scalar("render.shadow_normal_bias", r.shadow_normal_bias)?,
+    };
+    if settings.shadow_filter_radius < 0.0 {
+        return Err(ctx.invalid("render.shadow_filter_radius", "must be >= 0"));
+    }
+    if settings.shadow_normal_bias < 0.0 {
+        return Err(ctx.invalid("render.shadow_normal_bias", "must be >= 0"));
+    }
+
+    // [[materials]]
+    let mut materials: Vec<Material> = Vec::new();
+    let mut textures: Vec<Texture> = Vec::new();
+    let mut tex_cache: HashMap<PathBuf, u32> = HashMap::new();
+    let mut by_name: HashMap<String, u32> = HashMap::new();
+    for (i, m) in file.materials.iter().enumerate() {
+        let key = format!("materials.{i}");
+        if m.name.is_empty() {
+            return Err(ctx.invalid(format!("{key}.name"), "material name must not be empty"));
+        }
+        if by_name.contains_key(&m.name) {
+            return Err(ctx.invalid(format!("{key}.name"), format!("material `{}` is defined twice", m.name)));
+        }
+        let shininess = ctx.scalar(&format!("{key}.shininess"), m.shininess)?;
+        if shininess < 0.0 {
+            return Err(ctx.invalid(format!("{key}.shininess"), "must be >= 0"));
+        }
+        let albedo_texture = match &m.albedo_texture {
+            None => None,
+            Some(t) => {
+                let p = ctx.resolve(t)?;
+                let r = format!("{} {key}.albedo_texture", path.display());
+                Some(texture_index(&mut textures, &mut tex_cache, &p, &r)?)
+            }
+        };
+        by_name.insert(m.name.clone(), materials.len() as u32);
+        materials.push(Material {
+            name: m.name.clone(),
+            albedo: ctx.color(&format!("{key}.albedo"), m.albedo)?,
+            albedo_texture,
+            specular: ctx.color(&format!("{key}.specular"), m.specular)?,
+            shininess,
+            emission: ctx.color(&format!("{key}.emission"), m.emission)?,
+        });
+    }
+    let defined = || {
+        let mut v: Vec<&str> = file.materials.iter().map(|m| m.name.as_str()).collect();
+        v.sort_unstable();
+        if v.is_empty() {
+            "none are defined; add a [[materials]] entry".to_owned()
+        } else {
+            format!("defined: {}", v.join(", "))
+        }
+    };
+    let lookup = |key: String, name: &str| -> Result<u32, SceneError> {
+        by_name.get(name).copied().ok_or_else(|| ctx.invalid(key, format!("unknown material `{name}` ({})", defined())))
+    };
+
+    // [[objects]]
+    let mut meshes: Vec<Mesh> = Vec::new();
+    let mut objects: Vec<Object> = Vec::new();
+    let mut obj_cache: HashMap<PathBuf, (ObjData, Vec<Option<u32>>)> = HashMap::new();
+    let mut default_mat: Option<u32> = None;
+    for (i, o) in file.objects.iter().enumerate() {
+        let key = format!("objects.{i}");
+        let object_mat = match &o.material {
+            Some(m) => Some(lookup(format!("{key}.material"), m)?),
+            None => None,
+        };
+        let mut group_mats: BTreeMap<&str, u32> = BTreeMap::new();
+        for (g, m) in &o.materials {
+            group_mats.insert(g.as_str(), lookup(format!("{key}.materials.{g}"), m)?);
+        }
+        let translate = ctx.finite(&format!("{key}.translate"), o.translate)?;
+        let rotate = ctx.finite(&format!("{key}.rotate"), o.rotate)?;
+        let scale = ctx.scale(&format!("{key}.scale"), o.scale)?;
+        let motion = match (&o.motion, &o.keyframes) {
+            (Some(_), Some(_)) => {
+                return Err(ctx.invalid(key.clone(), "an object can have `motion` or `keyframes`, not both"))
+            }
+            (Some(m), None) => ctx.motion(&format!("{key}.motion"), m)?,
+            (None, Some(keys)) => {
+                if keys.is_empty() {
+                    return Err(ctx.invalid(format!("{key}.keyframes"), "keyframe list is empty"));
+                }
+                let mut out = Vec::with_capacity(keys.len());
+                for (k, kf) in keys.iter().enumerate() {
+                    let kk = format!("{key}.keyframes.{k}");
+                    let time = ctx.scalar(&format!("{kk}.time"), kf.time)?;
+                    if let Some(prev) = out.last().map(|p: &Keyframe| p.time) {
+                        if time <= prev {
+                            return Err(ctx.invalid(
+                                format!("{kk}.time"),
+                                format!("keyframe times must increase ({time} follows {prev})"),
+                            ));
+                        }
+                    }
+                    out.push(Keyframe {
+                        time,
+                        translate: ctx.finite(&format!("{kk}.translate"), kf.translate)?,
+                        rotate_deg: ctx.finite(&format!("{kk}.rotate"), kf.rotate)?,
+                        scale: ctx.scale(&format!("{kk}.scale"), kf.scale)?,
+                    });
+                }
+                Motion::Keyframes(out)
+            }
+            (None, None) => Motion::None,
+        };
+        if !motion.is_static() && !o.dynamic {
+            return Err(ctx.invalid(
+                format!("{key}.dynamic"),
+                "an object with `motion` or `keyframes` must be marked `dynamic = true`",
+            ));
+        }
+
+        let obj_path = ctx.resolve(&o.obj)?;
+        if !obj_cache.contains_key(&obj_path) {
+            let data = obj::load_obj(&obj_path)?;
+            // Bring this file's MTL materials into the scene (once per file).
+            let mut mtl_ids = Vec::with_capacity(data.materials.len());
+            for m in &data.materials {
+                let albedo_texture = match &m.albedo_texture {
+                    Some(p) => Some(texture_index(&mut textures, &mut tex_cache, p, &m.texture_ref)?),
+                    None => None,
+                };
+                mtl_ids.push(Some(materials.len() as u32));
+                materials.push(Material {
+                    name: m.name.clone(),
+                    albedo: m.albedo,
+                    albedo_texture,
+                    specular: m.specular,
+                    shininess: m.shininess,
+                    emission: m.emission,
+                });
+            }
+            obj_cache.insert(obj_path.clone(), (data, mtl_ids));
+        }
+        let Some((data, mtl_ids)) = obj_cache.get(&obj_path) else {
+            continue;
+        };
+        for g in group_mats.keys() {
+            if !data.groups.iter().any(|x| x.name == *g) {
+                let mut names: Vec<&str> = data.groups.iter().map(|x| x.name.as_str()).collect();
+                names.sort_unstable();
+                names.dedup();
+                return Err(ctx.invalid(
+                    format!("{key}.materials.{g}"),
+                    format!("{} has no group `{g}`; its groups are: {}", obj_path.display(), names.join(", ")),
+                ));
+            }
+        }
+        let mut mesh_ids = Vec::with_capacity(data.groups.len());
+        let mut defaulted = Vec::new();
+        for g in &data.groups {
+            let mtl = g.material.and_then(|k| mtl_ids.get(k).copied().flatten());
+            let material = match (group_mats.get(g.name.as_str()), object_mat, mtl) {
+                (Some(&m), _, _) | (None, Some(m), _) | (None, None, Some(m)) => m,
+                (None, None, None) => {
+                    defaulted.push(g.name.as_str());
+                    *default_mat.get_or_insert_with(|| {
+                        materials.push(default_material());
+                        (materials.len() - 1) as u32
+                    })
+                }
+            };
+            mesh_ids.push(meshes.len() as u32);
+            meshes.push(Mesh {
+                name: g.name.clone(),
+                positions: g.positions.clone(),
+                normals: g.normals.clone(),
+                uvs: g.uvs.clone(),
+                indices: g.indices.clone(),
+                material,
+                bounds: g.bounds,
+            });
+        }
+        if !defaulted.is_empty() {
+            log::warn!(
+                "{}: {key} ({}): no material for group(s) {}; using the default white material",
+                path.display(),
+                obj_path.display(),
+                defaulted.join(", ")
+            );
+        }
+        if mesh_ids.is_empty() {
+            log::warn!("{}: {key}: {} contains no triangles", path.display(), obj_path.display());
+        }
+        objects.push(Object {
+            name: match &o.name {
+                Some(n) if !n.is_empty() => n.clone(),
+                _ => obj_path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
+            },
+            meshes: mesh_ids,
+            transform: Mat4::from_scale_rotation_translation(scale, euler_quat(rotate), translate),
+            dynamic: o.dynamic,
+            motion,
+        });
+    }
+
+    // [[lights]]
+    let mut lights = Vec::with_capacity(file.lights.len());
+    for (i, l) in file.lights.iter().enumerate() {
+        lights.push(light(&ctx, i, l)?);
+    }
+
+    Ok(Scene { path: path.to_path_buf(), name, meshes, objects, materials, textures, camera, lights, settings, bounds })
+}
+
+fn light(ctx: &Ctx, i: usize, l: &LightDef) -> Result<Light, SceneError> {
+    let key = format!("lights.{i}");
+    let (allowed, required): (&[&str], &[&str]) = match l.kind.as_str() {
+        "point" => (&["position", "intensity"], &["position", "intensity"]),
+        "directional" => (&["direction", "irradiance"], &["direction", "irradiance"]),
+        "spot" => (
+            &["position", "direction", "intensity", "inner_angle", "outer_angle"],
+            &["position", "direction", "intensity"],
+        ),
+        other => {
+            return Err(ctx.invalid(
+                format!("{key}.type"),
+                format!("unknown light type `{other}`; expected one of: point, directional, spot"),
+            ))
+        }
+    };
+    let present = [
+        ("position", l.position.is_some()),
+        ("intensity", l.intensity.is_some()),
+        ("direction", l.direction.is_some()),
+        ("irradiance", l.irradiance.is_some()),
+        ("inner_angle", l.inner_angle.is_some()),
+        ("outer_angle", l.outer_angle.is_some()),
+    ];
+    for (k, is) in present {
+        if is && !allowed.contains(&k) {
+            return Err(ctx.invalid(
+                format!("{key}.{k}"),
+                format!(
+                    "`{k}` does not apply to {} lights (they take: {}, plus name, cast_shadows, motion)",
+                    l.kind,
+                    allowed.join(", ")
+                ),
+            ));
+        }
+        if !is && required.contains(&k) {
+            return Err(ctx.invalid(format!("{key}.{k}"), format!("a {} light needs `{k}`", l.kind)));
+        }
+    }
+    let get = |v: Option<[f32; 3]>| v.unwrap_or([0.0; 3]);
+    let direction = |ctx: &Ctx| -> Result<Vec3, SceneError> {
+        let d = ctx.finite(&format!("{key}.direction"), get(l.direction))?;
+        if d.length_squared() == 0.0 {
+            return Err(ctx.invalid(format!("{key}.direction"), "direction must not be zero"));
+        }
+        Ok(d.normalize())
+    };
+    let kind = match l.kind.as_str() {
+        "point" => LightKind::Point {
+            position: ctx.finite(&format!("{key}.position"), get(l.position))?,
+            intensity: ctx.color(&format!("{key}.intensity"), get(l.intensity))?,
+        },
+        "directional" => LightKind::Directional {
+            direction: direction(ctx)?,
+            irradiance: ctx.color(&format!("{key}.irradiance"), get(l.irradiance))?,
+        },
+        _ => {
+            let inner = ctx.scalar(&format!("{key}.inner_angle"), l.inner_angle.unwrap_or(20.0))?;
+            let outer = ctx.scalar(&format!("{key}.outer_angle"), l.outer_angle.unwrap_or(30.0))?;
+            if !(0.0..90.0).contains(&outer) {
+                return Err(ctx.invalid(
+                    format!("{key}.outer_angle"),
+                    format!("{outer} is not in [0, 90) degrees (it is a half-angle)"),
+                ));
+            }
+            if !(0.0..=outer).contains(&inner) {
+                return Err(ctx.invalid(
+                    format!("{key}.inner_angle"),
+                    format!("{inner} must be in [0, outer_angle = {outer}] degrees"),
+                ));
+            }
+            LightKind::Spot {
+                position: ctx.finite(&format!("{key}.position"), get(l.position))?,
+                direction: direction(ctx)?,
+                intensity: ctx.color(&format!("{key}.intensity"), get(l.intensity))?,
+                inner_deg: inner,
+                outer_deg: outer,
+            }
+        }
+    };
+    let motion = match &l.motion {
+        Some(m) => ctx.motion(&format!("{key}.motion"), m)?,
+        None => Motion::None,
+    };
+    Ok(Light {
+        name: match &l.name {
+            Some(n) if !n.is_empty() => n.clone(),
+            _ => format!("{}{i}", l.kind),
+        },
+        kind,
+        cast_shadows: l.cast_shadows,
+        motion,
+    })
+}

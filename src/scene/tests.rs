@@ -1,0 +1,932 @@
+//! Tests of the scene-loading layer (shipped scenes, overrides, every error path).
+
+use super::*;
+use glam::{Vec2, Vec3};
+use std::path::{Path, PathBuf};
+
+/// The repository root (works both in the crate and when this module is built elsewhere
+/// through `#[path]`).
+fn repo_root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn scenes_dir() -> PathBuf {
+    repo_root().join("scenes")
+}
+
+/// The shared test data (`../shared/scenes` next to the repository) must be present:
+/// these tests fail rather than skip without it.
+fn require_shared() {
+    let p = scenes_dir().join("../../shared/scenes/cornell-box/CornellBox-Original.obj");
+    assert!(p.is_file(), "{} not found: the shared test scenes must sit next to the repository", p.display());
+}
+
+fn load_default(p: &Path) -> Result<Scene, SceneError> {
+    load(p, &LoadOptions::default())
+}
+
+fn with_overrides(p: &Path, o: &[&str]) -> Result<Scene, SceneError> {
+    let overrides = o.iter().map(|s| parse_override(s)).collect::<Result<Vec<_>, _>>()?;
+    load(p, &LoadOptions { overrides, asset_paths: Vec::new() })
+}
+
+fn write(dir: &Path, name: &str, content: &str) -> PathBuf {
+    let p = dir.join(name);
+    if let Some(parent) = p.parent() {
+        std::fs::create_dir_all(parent).unwrap();
+    }
+    std::fs::write(&p, content).unwrap();
+    p
+}
+
+fn err_of(r: Result<Scene, SceneError>) -> SceneError {
+    match r {
+        Ok(_) => panic!("expected an error, got a scene"),
+        Err(e) => e,
+    }
+}
+
+/// Asserts the message contains all of `parts`, printing it otherwise.
+fn assert_msg(e: &SceneError, parts: &[&str]) {
+    let m = e.to_string();
+    for p in parts {
+        assert!(m.contains(p), "message does not contain {p:?}:\n{m}");
+    }
+}
+
+const CAMERA: &str = "[camera]\nposition = [0, 0, 5]\ntarget = [0, 0, 0]\n";
+
+const TRI_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+
+/// A scene in a temp dir with one object `tri.obj` (a triangle) plus `extra` TOML.
+fn tri_scene(dir: &Path, extra: &str) -> PathBuf {
+    write(dir, "tri.obj", TRI_OBJ);
+    write(dir, "scene.toml", &format!("{CAMERA}\n[[objects]]\nobj = \"tri.obj\"\n{extra}"))
+}
+
+fn mesh<'a>(s: &'a Scene, name: &str) -> &'a Mesh {
+    s.meshes.iter().find(|m| m.name == name).unwrap_or_else(|| panic!("no mesh {name}"))
+}
+
+fn approx(a: Vec3, b: Vec3, eps: f32) -> bool {
+    (a - b).abs().max_element() <= eps
+}
+
+// ---------------------------------------------------------------------------------------------
+// Shipped scenes
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn every_shipped_scene_loads() {
+    require_shared();
+    let mut n = 0;
+    for e in std::fs::read_dir(scenes_dir()).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().and_then(|x| x.to_str()) != Some("toml") {
+            continue;
+        }
+        let s = load_default(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        assert!(!s.meshes.is_empty(), "{}", p.display());
+        assert!(!s.lights.is_empty(), "{}", p.display());
+        for m in &s.meshes {
+            assert_eq!(m.positions.len(), m.normals.len());
+            assert_eq!(m.positions.len(), m.uvs.len());
+            assert_eq!(m.indices.len() % 3, 0);
+            assert!(m.indices.iter().all(|&i| (i as usize) < m.positions.len()));
+            assert!((m.material as usize) < s.materials.len());
+            assert!(m.normals.iter().all(|n| n.is_finite() && (n.length() - 1.0).abs() < 1e-3));
+            assert!(m.positions.iter().all(|p| p.is_finite()));
+        }
+        assert!(!s.world_bounds(s.settings.time).is_empty());
+        n += 1;
+    }
+    assert!(n >= 9, "found only {n} scenes");
+}
+
+#[test]
+fn authored_cornell_box_matches_published_data() {
+    let s = load_default(&scenes_dir().join("cornell-box.toml")).unwrap();
+    assert_eq!(s.name, "Cornell box");
+    let b = s.world_bounds(0.0);
+    assert!(approx(b.min, Vec3::ZERO, 1e-5), "{b:?}");
+    assert!(approx(b.max, Vec3::new(0.556, 0.5488, 0.5592), 1e-5), "{b:?}");
+    assert_eq!(s.meshes.len(), 7);
+    let white = Vec3::new(0.725, 0.71, 0.68);
+    let expect = [
+        ("floor", white),
+        ("ceiling", white),
+        ("backWall", white),
+        ("leftWall", Vec3::new(0.63, 0.065, 0.05)),
+        ("rightWall", Vec3::new(0.14, 0.45, 0.091)),
+        ("shortBlock", white),
+        ("tallBlock", white),
+    ];
+    for (name, albedo) in expect {
+        let m = mesh(&s, name);
+        let mat = &s.materials[m.material as usize];
+        assert!(approx(mat.albedo, albedo, 1e-6), "{name}: {mat:?}");
+        assert_eq!(mat.specular, Vec3::ZERO);
+        assert!(!mat.is_emissive());
+    }
+    // Red wall at x ~0.55, green at x = 0; short block top at 0.165, tall at 0.33.
+    assert!(mesh(&s, "leftWall").bounds.min.x > 0.549);
+    assert_eq!(mesh(&s, "rightWall").bounds.max.x, 0.0);
+    assert!((mesh(&s, "shortBlock").bounds.max.y - 0.165).abs() < 1e-6);
+    assert!((mesh(&s, "tallBlock").bounds.max.y - 0.33).abs() < 1e-6);
+    assert_eq!(mesh(&s, "shortBlock").indices.len(), 5 * 6);
+
+    // Floor normal +y; every wall normal points into the room, block normals outward,
+    // and the winding agrees with the normals.
+    assert!(mesh(&s, "floor").normals.iter().all(|n| approx(*n, Vec3::Y, 1e-6)));
+    let room_c = Vec3::new(0.278, 0.2744, 0.2796);
+    for m in &s.meshes {
+        let centroid = m.positions.iter().copied().sum::<Vec3>() / m.positions.len() as f32;
+        for (p, n) in m.positions.iter().zip(&m.normals) {
+            let d = if m.name.ends_with("Block") { *p - centroid } else { room_c - *p };
+            assert!(n.dot(d) > 0.0, "{}: normal {n} at {p}", m.name);
+        }
+        for t in m.indices.chunks(3) {
+            let (a, b, c) = (m.positions[t[0] as usize], m.positions[t[1] as usize], m.positions[t[2] as usize]);
+            let geo = (b - a).cross(c - a);
+            assert!(geo.dot(m.normals[t[0] as usize]) > 0.0, "{} winding", m.name);
+        }
+    }
+
+    // Camera and light as in the published setup.
+    assert_eq!(s.camera.position, Vec3::new(0.278, 0.273, -0.8));
+    assert_eq!(s.camera.fov_y_deg, 39.3);
+    match &s.lights[0].kind {
+        LightKind::Point { position, intensity } => {
+            assert_eq!(*position, Vec3::new(0.278, 0.4988, 0.2796));
+            assert_eq!(*intensity, Vec3::splat(1.2));
+        }
+        k => panic!("{k:?}"),
+    }
+    assert_eq!((s.settings.width, s.settings.height), (512, 512));
+    assert!(!s.has_dynamic());
+}
+
+#[test]
+fn sponza_loads_with_all_triangles() {
+    require_shared();
+    let s = load_default(&scenes_dir().join("sponza.toml")).unwrap();
+    assert_eq!(s.triangle_count(), 66_454);
+    assert_eq!(s.meshes.len(), 34);
+    let b = s.world_bounds(0.0);
+    assert!(approx(b.min, Vec3::new(-17.4, -0.91, -7.8), 0.05), "{b:?}");
+    assert!(approx(b.max, Vec3::new(17.42, 15.65, 7.8), 0.05), "{b:?}");
+    let mat = |g: &str| s.materials[mesh(&s, g).material as usize].name.clone();
+    assert_eq!(mat("floors"), "floor_stone");
+    assert_eq!(mat("doors"), "wood");
+    assert_eq!(mat("arcs_01"), "sandstone");
+    assert!(matches!(s.lights[0].kind, LightKind::Directional { .. }));
+    assert!(s.bounds.is_some());
+    assert_eq!((s.settings.width, s.settings.height), (640, 360));
+}
+
+#[test]
+fn mcguire_variants_keep_emissive_light() {
+    require_shared();
+    for f in [
+        "cornell-original.toml",
+        "cornell-sphere.toml",
+        "cornell-glossy.toml",
+        "cornell-mirror.toml",
+        "cornell-water.toml",
+        "cornell-empty-rg.toml",
+    ] {
+        let s = load_default(&scenes_dir().join(f)).unwrap();
+        let light = mesh(&s, "light");
+        assert!(s.materials[light.material as usize].is_emissive(), "{f}: light group not emissive");
+        // The point light is inside the box, under the ceiling.
+        let b = s.world_bounds(0.0);
+        if let LightKind::Point { position, .. } = s.lights[0].kind {
+            assert!(position.y < b.max.y && position.y > b.max.y - 0.1, "{f}");
+        }
+    }
+}
+
+#[test]
+fn glossy_obj_missing_light_material_falls_back_to_default() {
+    require_shared();
+    let dir = tempfile::tempdir().unwrap();
+    let shared = scenes_dir().join("../../shared/scenes");
+    let p = write(
+        dir.path(),
+        "g.toml",
+        &format!(
+            "[scene]\nsearch_paths = [{:?}]\n{CAMERA}\n[[objects]]\nobj = \"cornell-box/CornellBox-Glossy.obj\"\n",
+            shared.display().to_string()
+        ),
+    );
+    let s = load_default(&p).unwrap();
+    let m = &s.materials[mesh(&s, "light").material as usize];
+    assert_eq!(m.name, "default");
+    assert_eq!(m.albedo, Vec3::splat(0.8));
+    let f = &s.materials[mesh(&s, "floor").material as usize];
+    assert_eq!(f.name, "floor");
+    assert!(!f.is_glossy());
+    let sphere = &s.materials[mesh(&s, "sphere").material as usize];
+    assert_eq!(sphere.specular, Vec3::splat(0.9));
+}
+
+#[test]
+fn dynamic_test_scene_moves() {
+    let s = load_default(&scenes_dir().join("dynamic-test.toml")).unwrap();
+    assert!(s.has_dynamic());
+    let spinner = s.objects.iter().find(|o| o.name == "spinner").unwrap();
+    assert!(spinner.dynamic);
+    let slider = s.objects.iter().find(|o| o.name == "slider").unwrap();
+    let p0 = slider.model_matrix(0.0).transform_point3(Vec3::ZERO);
+    let p1 = slider.model_matrix(1.0).transform_point3(Vec3::ZERO);
+    assert!(approx(p0, Vec3::new(0.10, 0.02, 0.032), 1e-6));
+    assert!(approx(p1, Vec3::new(0.275, 0.02, 0.032), 1e-6));
+    // Everything stays inside the box.
+    let b = s.world_bounds(1.3);
+    assert!(b.min.min_element() >= -1e-6 && b.max.y <= 0.5488 + 1e-6);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Overrides
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn overrides_apply() {
+    let p = scenes_dir().join("cornell-box.toml");
+    let s = with_overrides(
+        &p,
+        &[
+            "camera.fov_y=45",
+            "lights.0.intensity=[1,2,3]",
+            "render.width=64",
+            "objects.0.dynamic=true",
+            "render.tonemap=reinhard",
+            "render.time = 2.5",
+            "scene.name=renamed",
+        ],
+    )
+    .unwrap();
+    assert_eq!(s.camera.fov_y_deg, 45.0);
+    assert_eq!(s.settings.width, 64);
+    assert_eq!(s.settings.height, 512);
+    assert_eq!(s.settings.time, 2.5);
+    assert_eq!(s.settings.tonemap, ToneMap::Reinhard);
+    assert!(s.objects[0].dynamic);
+    assert_eq!(s.name, "renamed");
+    match &s.lights[0].kind {
+        LightKind::Point { intensity, .. } => assert_eq!(*intensity, Vec3::new(1.0, 2.0, 3.0)),
+        k => panic!("{k:?}"),
+    }
+}
+
+#[test]
+fn override_can_add_optional_tables_and_group_materials() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "two.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\ng a\nf 1 2 3\ng b\nf 1 3 2\n");
+    let p = write(
+        dir.path(),
+        "s.toml",
+        &format!("{CAMERA}\n[[materials]]\nname = \"red\"\nalbedo = [1, 0, 0]\n[[objects]]\nobj = \"two.obj\"\n"),
+    );
+    let s = with_overrides(
+        &p,
+        &[
+            "objects.0.materials.b=red",
+            "objects.0.dynamic=true",
+            "objects.0.motion.degrees_per_second=90",
+            "scene.bounds={ min = [-1,-1,-1], max = [1,1,1] }",
+        ],
+    )
+    .unwrap();
+    assert_eq!(s.materials[mesh(&s, "b").material as usize].name, "red");
+    assert_eq!(s.materials[mesh(&s, "a").material as usize].name, "default");
+    assert!(matches!(s.objects[0].motion, Motion::Parametric { .. }));
+    assert_eq!(s.bounds.unwrap().max, Vec3::ONE);
+}
+
+#[test]
+fn unknown_override_key_is_named() {
+    let p = scenes_dir().join("cornell-box.toml");
+    let e = err_of(with_overrides(&p, &["camera.fovy=45"]));
+    assert!(matches!(e, SceneError::UnknownKey { .. }), "{e:?}");
+    assert_msg(&e, &["camera.fovy", "fov_y", "cornell-box.toml"]);
+
+    let e = err_of(with_overrides(&p, &["lights.3.intensity=[1,1,1]"]));
+    assert!(matches!(e, SceneError::UnknownKey { .. }), "{e:?}");
+    assert_msg(&e, &["lights.3.intensity", "out of range", "0"]);
+
+    let e = err_of(with_overrides(&p, &["bogus=1"]));
+    assert_msg(&e, &["bogus", "camera", "render", "lights"]);
+
+    let e = err_of(with_overrides(&p, &["camera.fov_y.x=1"]));
+    assert_msg(&e, &["camera.fov_y.x", "not a table"]);
+
+    let e = err_of(with_overrides(&p, &["render.width=abc"]));
+    assert!(matches!(e, SceneError::Toml { .. }), "{e:?}");
+    assert_msg(&e, &["render.width=abc", "cornell-box.toml"]);
+
+    let e = err_of(with_overrides(&p, &["render.width=0"]));
+    assert_msg(&e, &["render.width", "1..=16384"]);
+}
+
+#[test]
+fn parse_override_syntax() {
+    assert_eq!(parse_override("a.b.c=value").unwrap(), ("a.b.c".to_owned(), "value".to_owned()));
+    assert_eq!(parse_override("x=[1, 2]=3").unwrap(), ("x".to_owned(), "[1, 2]=3".to_owned()));
+    let e = parse_override("camera.fov_y").unwrap_err();
+    assert!(matches!(e, SceneError::BadOverride { .. }));
+    assert_msg(&e, &["camera.fov_y", "KEY=VALUE"]);
+    assert!(parse_override("=3").is_err());
+    let e = err_of(with_overrides(&scenes_dir().join("cornell-box.toml"), &["camera..fov_y=3"]));
+    assert!(matches!(e, SceneError::BadOverride { .. }));
+}
+
+#[test]
+fn override_key_lists_match_the_schema() {
+    use super::file::*;
+    fn expected<T: serde::de::DeserializeOwned + std::fmt::Debug>(tbl: &str) -> Vec<String> {
+        let e = toml::from_str::<T>(&format!("{tbl}zzz_unknown = 1\n")).unwrap_err();
+        let m = e.to_string();
+        let tail = m.split("expected").nth(1).unwrap_or_else(|| panic!("{m}"));
+        let mut v: Vec<String> = tail.split('`').skip(1).step_by(2).map(str::to_owned).collect();
+        v.sort();
+        v
+    }
+    fn sorted(k: &[&str]) -> Vec<String> {
+        let mut v: Vec<String> = k.iter().map(|s| s.to_string()).collect();
+        v.sort();
+        v
+    }
+    assert_eq!(expected::<SceneFile>(""), sorted(TOP_KEYS));
+    assert_eq!(expected::<SceneSection>(""), sorted(SCENE_KEYS));
+    assert_eq!(expected::<BoundsDef>(""), sorted(BOUNDS_KEYS));
+    assert_eq!(expected::<CameraDef>(""), sorted(CAMERA_KEYS));
+    assert_eq!(expected::<RenderDef>(""), sorted(RENDER_KEYS));
+    assert_eq!(expected::<MaterialDef>(""), sorted(MATERIAL_KEYS));
+    assert_eq!(expected::<ObjectDef>(""), sorted(OBJECT_KEYS));
+    assert_eq!(expected::<MotionDef>(""), sorted(MOTION_KEYS));
+    assert_eq!(expected::<KeyframeDef>(""), sorted(KEYFRAME_KEYS));
+    assert_eq!(expected::<LightDef>(""), sorted(LIGHT_KEYS));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scene-file errors
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn missing_scene_file() {
+    let e = err_of(load_default(Path::new("/nonexistent/dir/nope.toml")));
+    assert!(matches!(e, SceneError::Io { .. }));
+    assert_msg(&e, &["nope.toml", "cannot read"]);
+}
+
+#[test]
+fn malformed_toml_reports_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "bad.toml", "[camera]\nposition = [0, 0, 5\n");
+    let e = err_of(load_default(&p));
+    assert!(matches!(e, SceneError::Toml { .. }));
+    assert_msg(&e, &["bad.toml", "line 2"]);
+}
+
+#[test]
+fn unknown_key_in_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "k.toml", "[camera]\nposition = [0, 0, 5]\ntarget = [0, 0, 0]\nfovy = 30\n");
+    let e = err_of(load_default(&p));
+    assert_msg(&e, &["k.toml", "line 4", "fovy", "fov_y"]);
+}
+
+#[test]
+fn wrong_type_in_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "t.toml", "[camera]\nposition = [0, 0, 5]\ntarget = [0, 0, 0]\nfov_y = \"wide\"\n");
+    let e = err_of(load_default(&p));
+    assert_msg(&e, &["t.toml", "line 4", "invalid type"]);
+    let p = write(dir.path(), "t2.toml", &format!("{CAMERA}[[objects]]\nobj = \"x.obj\"\nscale = \"big\"\n"));
+    assert_msg(&err_of(load_default(&p)), &["t2.toml", "line 6", "a number or an array of 3"]);
+    let p = write(dir.path(), "t3.toml", "[render]\nwidth = 10\n");
+    assert_msg(&err_of(load_default(&p)), &["t3.toml", "camera"]);
+}
+
+#[test]
+fn missing_obj_lists_tried_paths() {
+    let dir = tempfile::tempdir().unwrap();
+    let extra = dir.path().join("assets");
+    let p = write(
+        dir.path(),
+        "m.toml",
+        &format!("[scene]\nsearch_paths = [\"lib\"]\n{CAMERA}[[objects]]\nobj = \"models/gone.obj\"\n"),
+    );
+    let e = err_of(load(&p, &LoadOptions { overrides: vec![], asset_paths: vec![extra.clone()] }));
+    let SceneError::AssetNotFound { tried, .. } = &e else { panic!("{e:?}") };
+    assert_eq!(
+        tried,
+        &vec![
+            dir.path().join("models/gone.obj"),
+            extra.join("models/gone.obj"),
+            dir.path().join("lib").join("models/gone.obj"),
+        ]
+    );
+    let ps = |p: PathBuf| p.display().to_string();
+    assert_msg(
+        &e,
+        &[
+            "m.toml",
+            "models/gone.obj",
+            &ps(dir.path().join("models/gone.obj")),
+            &ps(extra.join("models/gone.obj")),
+            &ps(dir.path().join("lib/models/gone.obj")),
+        ],
+    );
+}
+
+#[test]
+fn asset_paths_and_search_paths_resolve() {
+    let dir = tempfile::tempdir().unwrap();
+    write(&dir.path().join("assets"), "a.obj", TRI_OBJ);
+    write(&dir.path().join("lib"), "b.obj", TRI_OBJ);
+    let p = write(
+        &dir.path().join("scenes"),
+        "s.toml",
+        &format!(
+            "[scene]\nsearch_paths = [\"../lib\"]\n{CAMERA}[[objects]]\nobj = \"a.obj\"\n[[objects]]\nobj = \"b.obj\"\n"
+        ),
+    );
+    let s = load(&p, &LoadOptions { overrides: vec![], asset_paths: vec![dir.path().join("assets")] }).unwrap();
+    assert_eq!(s.objects.len(), 2);
+    assert_eq!(s.objects[0].name, "a");
+    assert_eq!(s.objects[1].name, "b");
+    assert_eq!(s.name, "s");
+}
+
+#[test]
+fn invalid_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(d, "tri.obj", TRI_OBJ);
+    let cases: &[(&str, &[&str])] = &[
+        (
+            "[camera]\nposition = [0, 0, 5]\ntarget = [0, 0, 0]\nfov_y = 0\n",
+            &["camera.fov_y", "(0, 180)"],
+        ),
+        (
+            "[camera]\nposition = [0, 0, 5]\ntarget = [0, 0, 0]\nfov_y = 180\n",
+            &["camera.fov_y"],
+        ),
+        (
+            "[camera]\nposition = [0, 0, 5]\ntarget = [0, 0, 5]\n",
+            &["camera.target", "same point"],
+        ),
+        (
+            "[camera]\nposition = [0, 0, 5]\ntarget = [0, 0, 0]\nnear = 1\nfar = 0.5\n",
+            &["camera.far"],
+        ),
+        (
+            "[camera]\nposition = [0, 5, 0]\ntarget = [0, 0, 0]\n",
+            &["camera.up", "parallel"],
+        ),
+        (&format!("{CAMERA}[render]\nwidth = 0\n"), &["render.width", "1..=16384"]),
+        (&format!("{CAMERA}[render]\nheight = 20000\n"), &["render.height"]),
+        (&format!("{CAMERA}[render]\nshadow_map_size = 8\n"), &["render.shadow_map_size"]),
+        (
+            &format!("{CAMERA}[scene]\nbounds = {{ min = [1, 1, 1], max = [0, 2, 2] }}\n"),
+            &["scene.bounds", "smaller"],
+        ),
+        (
+            &format!(
+                "{CAMERA}[[lights]]\ntype = \"spot\"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\nintensity = [1, 1, 1]\ninner_angle = 40\nouter_angle = 30\n"
+            ),
+            &["lights.0.inner_angle", "outer_angle = 30"],
+        ),
+        (
+            &format!(
+                "{CAMERA}[[lights]]\ntype = \"spot\"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\nintensity = [1, 1, 1]\nouter_angle = 95\n"
+            ),
+            &["lights.0.outer_angle", "[0, 90)"],
+        ),
+        (
+            &format!("{CAMERA}[[lights]]\ntype = \"area\"\nposition = [0, 1, 0]\n"),
+            &["lights.0.type", "unknown light type `area`", "point, directional, spot"],
+        ),
+        (
+            &format!(
+                "{CAMERA}[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = [1, 1, 1]\nirradiance = [1, 1, 1]\n"
+            ),
+            &["lights.0.irradiance", "does not apply to point lights"],
+        ),
+        (
+            &format!("{CAMERA}[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\n"),
+            &["lights.0.intensity", "needs"],
+        ),
+        (
+            &format!(
+                "{CAMERA}[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = [1, -1, 1]\n"
+            ),
+            &["lights.0.intensity", ">= 0"],
+        ),
+        (
+            &format!(
+                "{CAMERA}[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = [1, nan, 1]\n"
+            ),
+            &["lights.0.intensity", "not finite"],
+        ),
+        (
+            &format!(
+                "{CAMERA}[[lights]]\ntype = \"directional\"\ndirection = [0, 0, 0]\nirradiance = [1, 1, 1]\n"
+            ),
+            &["lights.0.direction", "zero"],
+        ),
+        (
+            &format!("{CAMERA}[[objects]]\nobj = \"tri.obj\"\nmaterial = \"chrome\"\n"),
+            &["objects.0.material", "unknown material `chrome`"],
+        ),
+        (
+            &format!(
+                "{CAMERA}[[materials]]\nname = \"w\"\n[[objects]]\nobj = \"tri.obj\"\nmaterials = {{ floor = \"nope\" }}\n"
+            ),
+            &["objects.0.materials.floor", "unknown material `nope`", "defined: w"],
+        ),
+        (
+            &format!(
+                "{CAMERA}[[materials]]\nname = \"w\"\n[[objects]]\nobj = \"tri.obj\"\nmaterials = {{ floor = \"w\" }}\n"
+            ),
+            &["objects.0.materials.floor", "no group `floor`", "unnamed_object"],
+        ),
+        (
+            &format!("{CAMERA}[[materials]]\nname = \"w\"\n[[materials]]\nname = \"w\"\n"),
+            &["materials.1.name", "defined twice"],
+        ),
+        (
+            &format!("{CAMERA}[[materials]]\nname = \"w\"\nalbedo = [0.5, -0.1, 0]\n"),
+            &["materials.0.albedo", ">= 0"],
+        ),
+        (
+            &format!("{CAMERA}[[objects]]\nobj = \"tri.obj\"\nscale = 0\n"),
+            &["objects.0.scale", "zero"],
+        ),
+        (
+            &format!(
+                "{CAMERA}[[objects]]\nobj = \"tri.obj\"\nmotion = {{ degrees_per_second = 10 }}\n"
+            ),
+            &["objects.0.dynamic", "dynamic = true"],
+        ),
+        (
+            &format!(
+                "{CAMERA}[[objects]]\nobj = \"tri.obj\"\nkeyframes = [{{ time = 0 }}]\n"
+            ),
+            &["objects.0.dynamic", "dynamic = true"],
+        ),
+        (
+            &format!(
+                "{CAMERA}[[objects]]\nobj = \"tri.obj\"\ndynamic = true\nmotion = {{ period = 1 }}\nkeyframes = [{{ time = 0 }}]\n"
+            ),
+            &["objects.0", "not both"],
+        ),
+        (
+            &format!(
+                "{CAMERA}[[objects]]\nobj = \"tri.obj\"\ndynamic = true\nkeyframes = [{{ time = 1 }}, {{ time = 1 }}]\n"
+            ),
+            &["objects.0.keyframes.1.time", "must increase"],
+        ),
+        (
+            &format!(
+                "{CAMERA}[[objects]]\nobj = \"tri.obj\"\ndynamic = true\nmotion = {{ axis = [0, 0, 0], degrees_per_second = 5 }}\n"
+            ),
+            &["objects.0.motion.axis"],
+        ),
+    ];
+    for (k, (toml_text, parts)) in cases.iter().enumerate() {
+        let p = write(d, &format!("case{k}.toml"), toml_text);
+        let e = err_of(load_default(&p));
+        assert!(matches!(e, SceneError::InvalidValue { .. }), "case {k}: {e:?}");
+        let mut all = vec![format!("case{k}.toml")];
+        all.extend(parts.iter().map(|s| s.to_string()));
+        assert_msg(&e, &all.iter().map(String::as_str).collect::<Vec<_>>());
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// OBJ / MTL / texture errors
+// ---------------------------------------------------------------------------------------------
+
+fn obj_case(obj: &str) -> SceneError {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "m.obj", obj);
+    let p = write(dir.path(), "s.toml", &format!("{CAMERA}[[objects]]\nobj = \"m.obj\"\n"));
+    err_of(load_default(&p))
+}
+
+#[test]
+fn malformed_obj() {
+    let e = obj_case("v 0 0 0\nv 1 2 abc\n");
+    assert!(matches!(e, SceneError::Obj { .. }));
+    assert_msg(&e, &["m.obj", "line 2", "`abc` is not a number"]);
+    assert_msg(&obj_case("v 0 0\n"), &["m.obj", "line 1", "3 coordinates"]);
+    assert_msg(&obj_case("v 0 0 0 0\n"), &["m.obj", "line 1", "w"]);
+    assert_msg(&obj_case("v 0 0 0\nvn 0 x 0\n"), &["m.obj", "line 2", "normal"]);
+    assert_msg(&obj_case("v 0 0 0\nvt 0\n"), &["m.obj", "line 2", "texture coordinate"]);
+    assert_msg(&obj_case("v 0 0 0\nv 1 0 0\nf 1 2\n"), &["m.obj", "line 3", "at least 3"]);
+    assert_msg(&obj_case(&format!("{TRI_OBJ}f 1/2/3/4 2 3\n")), &["m.obj", "line 5"]);
+    assert_msg(&obj_case(&format!("{TRI_OBJ}f a 2 3\n")), &["m.obj", "line 5", "integer"]);
+    assert_msg(&obj_case("v 0 0 0\nusemtl\n"), &["m.obj", "line 2", "usemtl"]);
+}
+
+#[test]
+fn face_index_out_of_range() {
+    let e = obj_case("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n");
+    assert!(matches!(e, SceneError::Obj { .. }));
+    assert_msg(&e, &["m.obj", "line 4", "vertex 4", "only 3"]);
+    assert_msg(&obj_case(&format!("{TRI_OBJ}f -1 -2 -4\n")), &["m.obj", "line 5", "-4"]);
+    assert_msg(&obj_case(&format!("{TRI_OBJ}f 0 1 2\n")), &["m.obj", "line 5", "index 0"]);
+    assert_msg(&obj_case(&format!("{TRI_OBJ}vn 0 0 1\nf 1//1 2//2 3//1\n")), &["m.obj", "line 6", "normal 2"]);
+    assert_msg(&obj_case(&format!("{TRI_OBJ}f 1/1 2/1 3/1\n")), &["m.obj", "line 5", "texture coordinate 1"]);
+    assert_msg(&obj_case(&format!("{TRI_OBJ}f 99999999999999999999 1 2\n")), &["m.obj", "line 5"]);
+}
+
+#[test]
+fn nan_coordinates_rejected() {
+    let e = obj_case("v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n");
+    assert_msg(&e, &["m.obj", "line 2", "not a finite number"]);
+    assert_msg(&obj_case("v 0 0 inf\n"), &["m.obj", "line 1", "finite"]);
+    assert_msg(&obj_case("v 0 0 1e39\n"), &["m.obj", "line 1", "finite"]);
+    assert_msg(&obj_case("v 0 0 0\nvn NaN 0 0\n"), &["m.obj", "line 2", "finite"]);
+}
+
+#[test]
+fn missing_mtl() {
+    let e = obj_case(&format!("mtllib nothere.mtl\n{TRI_OBJ}"));
+    assert!(matches!(e, SceneError::Mtl { .. }));
+    assert_msg(&e, &["nothere.mtl", "m.obj line 1", "not found"]);
+}
+
+#[test]
+fn malformed_mtl() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "m.obj", &format!("mtllib m.mtl\nusemtl a\n{TRI_OBJ}"));
+    let p = write(dir.path(), "s.toml", &format!("{CAMERA}[[objects]]\nobj = \"m.obj\"\n"));
+    for (mtl, parts) in [
+        ("newmtl a\nKd 0.5 0.5\n", vec!["m.mtl", "line 2", "Kd"]),
+        ("newmtl a\nKd 0.5 x 1\n", vec!["m.mtl", "line 2", "`x`"]),
+        ("newmtl a\nKs -1 0 0\n", vec!["m.mtl", "line 2", "negative"]),
+        ("newmtl a\nNs\n", vec!["m.mtl", "line 2", "Ns"]),
+        ("newmtl a\nKe nan 0 0\n", vec!["m.mtl", "line 2", "finite"]),
+        ("newmtl\n", vec!["m.mtl", "line 1", "newmtl"]),
+    ] {
+        write(dir.path(), "m.mtl", mtl);
+        let e = err_of(load_default(&p));
+        assert!(matches!(e, SceneError::Mtl { .. }), "{e:?}");
+        assert_msg(&e, &parts);
+    }
+}
+
+#[test]
+fn missing_texture() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "m.obj", &format!("mtllib m.mtl\nusemtl a\n{TRI_OBJ}"));
+    write(dir.path(), "m.mtl", "newmtl a\nKd 1 1 1\nmap_Kd tex/gone.png\n");
+    let p = write(dir.path(), "s.toml", &format!("{CAMERA}[[objects]]\nobj = \"m.obj\"\n"));
+    let e = err_of(load_default(&p));
+    assert!(matches!(e, SceneError::Texture { .. }), "{e:?}");
+    assert_msg(&e, &["gone.png", "m.mtl line 3", "not found"]);
+
+    // A scene-file texture goes through asset resolution.
+    let p =
+        write(dir.path(), "s2.toml", &format!("{CAMERA}[[materials]]\nname = \"t\"\nalbedo_texture = \"none.png\"\n"));
+    let e = err_of(load_default(&p));
+    assert!(matches!(e, SceneError::AssetNotFound { .. }), "{e:?}");
+    assert_msg(&e, &["s2.toml", "none.png"]);
+}
+
+#[test]
+fn corrupt_texture() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "bad.png", "this is not a png at all \x01\x02\x03");
+    write(dir.path(), "m.obj", &format!("mtllib m.mtl\nusemtl a\n{TRI_OBJ}"));
+    write(dir.path(), "m.mtl", "newmtl a\nmap_Kd bad.png\n");
+    let p = write(dir.path(), "s.toml", &format!("{CAMERA}[[objects]]\nobj = \"m.obj\"\n"));
+    let e = err_of(load_default(&p));
+    assert!(matches!(e, SceneError::Texture { .. }), "{e:?}");
+    assert_msg(&e, &["bad.png", "decode", "m.mtl line 2"]);
+
+    let p =
+        write(dir.path(), "s2.toml", &format!("{CAMERA}[[materials]]\nname = \"t\"\nalbedo_texture = \"bad.png\"\n"));
+    let e = err_of(load_default(&p));
+    assert_msg(&e, &["bad.png", "decode", "s2.toml"]);
+}
+
+#[test]
+fn texture_loads() {
+    let dir = tempfile::tempdir().unwrap();
+    let px: Vec<u8> = vec![
+        255, 0, 0, 255, 0, 255, 0, 255, //
+        0, 0, 255, 255, 255, 255, 255, 128,
+    ];
+    image::RgbaImage::from_raw(2, 2, px.clone()).unwrap().save(dir.path().join("t.png")).unwrap();
+    write(
+        dir.path(),
+        "m.obj",
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl a\nf 1/1 2/2 3/3\n",
+    );
+    write(dir.path(), "m.mtl", "newmtl a\nKd 1 1 1\nmap_Kd -s 1 1 1 t.png\n");
+    let p = write(
+        dir.path(),
+        "s.toml",
+        &format!("{CAMERA}[[materials]]\nname = \"same\"\nalbedo_texture = \"t.png\"\n[[objects]]\nobj = \"m.obj\"\n"),
+    );
+    let s = load_default(&p).unwrap();
+    assert_eq!(s.textures.len(), 1, "the same file is decoded once");
+    let t = &s.textures[0];
+    assert_eq!((t.width, t.height), (2, 2));
+    assert_eq!(t.rgba8, px);
+    let m = &s.materials[s.meshes[0].material as usize];
+    assert_eq!(m.name, "a");
+    assert_eq!(m.albedo_texture, Some(0));
+    assert_eq!(s.materials[0].albedo_texture, Some(0));
+    // UVs are flipped to a top-left origin.
+    assert_eq!(s.meshes[0].uvs[0], Vec2::new(0.0, 1.0));
+    assert_eq!(s.meshes[0].uvs[2], Vec2::new(0.0, 0.0));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Geometry and materials
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn material_precedence() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "m.obj",
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\ng a\nusemtl ma\nf 1 2 3\ng b\nusemtl mb\nf 1 2 3\ng c\nusemtl undefined\nf 1 2 3\n",
+    );
+    write(
+        dir.path(),
+        "m.mtl",
+        "newmtl ma\nKd 0.1 0.2 0.3\nKs 0.5 0.5 0.5\nNs 20\nKe 1 2 3 # glow\nnewmtl mb\nKd 0.4\n",
+    );
+    let base =
+        format!("{CAMERA}[[materials]]\nname = \"s1\"\n[[materials]]\nname = \"s2\"\n[[objects]]\nobj = \"m.obj\"\n");
+    // MTL materials, and the default for an unknown usemtl.
+    let p = write(dir.path(), "s.toml", &base);
+    let s = load_default(&p).unwrap();
+    let mat = |s: &Scene, g: &str| s.materials[mesh(s, g).material as usize].clone();
+    let ma = mat(&s, "a");
+    assert_eq!(ma.name, "ma");
+    assert_eq!(ma.albedo, Vec3::new(0.1, 0.2, 0.3));
+    assert_eq!(ma.specular, Vec3::splat(0.5));
+    assert_eq!(ma.shininess, 20.0);
+    assert_eq!(ma.emission, Vec3::new(1.0, 2.0, 3.0));
+    assert_eq!(mat(&s, "b").albedo, Vec3::splat(0.4));
+    assert_eq!(mat(&s, "c").name, "default");
+    assert_eq!(mat(&s, "c").albedo, Vec3::splat(0.8));
+    // Object-wide beats MTL; per-group beats object-wide.
+    let p = write(dir.path(), "s2.toml", &format!("{base}material = \"s1\"\nmaterials = {{ b = \"s2\" }}\n"));
+    let s = load_default(&p).unwrap();
+    assert_eq!(mat(&s, "a").name, "s1");
+    assert_eq!(mat(&s, "b").name, "s2");
+    assert_eq!(mat(&s, "c").name, "s1");
+}
+
+#[test]
+fn no_mtllib_uses_default_material() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = tri_scene(dir.path(), "");
+    let s = load_default(&p).unwrap();
+    assert_eq!(s.materials.len(), 1);
+    assert_eq!(s.materials[0].name, "default");
+    assert_eq!(s.materials[0].albedo, Vec3::splat(0.8));
+    // No normals in the file: generated, facing +z for this CCW triangle; zero UVs.
+    assert!(s.meshes[0].normals.iter().all(|n| *n == Vec3::Z));
+    assert!(s.meshes[0].uvs.iter().all(|u| *u == Vec2::ZERO));
+    assert_eq!(s.objects[0].name, "tri");
+}
+
+#[test]
+fn generated_normals_respect_creases_and_smooth_gentle_angles() {
+    let dir = tempfile::tempdir().unwrap();
+    // A cube with 8 shared corners and no normals: every face must get its own flat normal.
+    let cube = "v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n\
+                f 1 4 3 2\nf 5 6 7 8\nf 1 5 8 4\nf 2 3 7 6\nf 4 8 7 3\nf 1 2 6 5\n";
+    write(dir.path(), "cube.obj", cube);
+    // Two faces meeting at a gentle 20 degree fold share a smoothed normal along the fold.
+    let t = 20f32.to_radians().tan();
+    write(dir.path(), "fold.obj", &format!("v 0 0 0\nv 0 0 1\nv 1 0 0\nv -1 {t} 0\nf 1 2 3\nf 1 4 2\n"));
+    // A degenerate triangle (all points on a line) still gets unit normals.
+    write(dir.path(), "line.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+    let p = write(
+        dir.path(),
+        "s.toml",
+        &format!(
+            "{CAMERA}[[objects]]\nobj = \"cube.obj\"\n[[objects]]\nobj = \"fold.obj\"\n[[objects]]\nobj = \"line.obj\"\n"
+        ),
+    );
+    let s = load_default(&p).unwrap();
+    let c = &s.meshes[s.objects[0].meshes[0] as usize];
+    assert_eq!(c.positions.len(), 24);
+    for t in c.indices.chunks(3) {
+        let (a, b, d) = (c.positions[t[0] as usize], c.positions[t[1] as usize], c.positions[t[2] as usize]);
+        let f = (b - a).cross(d - a).normalize();
+        for &i in t {
+            assert!(approx(c.normals[i as usize], f, 1e-6));
+            // Outward for this cube.
+            assert!(c.normals[i as usize].dot(c.positions[i as usize]) > 0.0);
+        }
+    }
+    let f = &s.meshes[s.objects[1].meshes[0] as usize];
+    assert_eq!(f.positions.len(), 4);
+    let shared = f.positions.iter().position(|p| *p == Vec3::ZERO).unwrap();
+    let n = f.normals[shared];
+    assert!(n.y > 0.95 && n.x > 0.05, "{n}");
+    let l = &s.meshes[s.objects[2].meshes[0] as usize];
+    assert!(l.normals.iter().all(|n| *n == Vec3::Y));
+}
+
+#[test]
+fn provided_normals_are_normalised_and_repaired() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 2\nvn 0 0 0\nf 1//1 2//1 3//2\n");
+    let p = write(dir.path(), "s.toml", &format!("{CAMERA}[[objects]]\nobj = \"n.obj\"\n"));
+    let s = load_default(&p).unwrap();
+    assert!(s.meshes[0].normals.iter().all(|n| *n == Vec3::Z));
+}
+
+#[test]
+fn groups_become_meshes_and_objects_transform() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "g.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\no first\nf 1 2 3\ng second\nf 2 4 3\nl 1 2 3\n");
+    let p = write(
+        dir.path(),
+        "s.toml",
+        &format!(
+            "{CAMERA}[[objects]]\nname = \"thing\"\nobj = \"g.obj\"\ntranslate = [10, 0, 0]\nrotate = [0, 0, 90]\nscale = [2, 1, 1]\n"
+        ),
+    );
+    let s = load_default(&p).unwrap();
+    assert_eq!(s.meshes.len(), 2);
+    assert_eq!(s.meshes[0].name, "first");
+    assert_eq!(s.meshes[1].name, "second");
+    assert_eq!(s.meshes[1].indices.len(), 3, "the `l` element is not a triangle");
+    assert_eq!(s.objects[0].name, "thing");
+    // scale x2 in x, then rotate 90 deg about z, then translate.
+    let p = s.objects[0].model_matrix(0.0).transform_point3(Vec3::X);
+    assert!(approx(p, Vec3::new(10.0, 2.0, 0.0), 1e-5), "{p}");
+    let b = s.world_bounds(0.0);
+    assert!(approx(b.min, Vec3::new(9.0, 0.0, 0.0), 1e-5), "{b:?}");
+    assert!(approx(b.max, Vec3::new(10.0, 2.0, 0.0), 1e-5), "{b:?}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Motion
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn parametric_motion_rotates() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = tri_scene(
+        dir.path(),
+        "translate = [1, 0, 0]\ndynamic = true\nmotion = { axis = [0, 2, 0], degrees_per_second = 90 }\n\
+         [[lights]]\ntype = \"spot\"\nposition = [0, 1, 0]\ndirection = [0, -2, 0]\nintensity = [1, 1, 1]\n\
+         motion = { velocity = [1, 0, 0] }\n",
+    );
+    let s = load_default(&p).unwrap();
+    assert!(s.has_dynamic());
+    let o = &s.objects[0];
+    let at0 = o.model_matrix(0.0).transform_point3(Vec3::ZERO);
+    let at1 = o.model_matrix(1.0).transform_point3(Vec3::ZERO);
+    assert!(approx(at0, Vec3::X, 1e-6));
+    assert!(approx(at1, Vec3::new(0.0, 0.0, -1.0), 1e-5), "{at1}");
+    match &s.lights[0].kind {
+        LightKind::Spot { direction, inner_deg, outer_deg, .. } => {
+            assert_eq!(*direction, Vec3::NEG_Y);
+            assert_eq!((*inner_deg, *outer_deg), (20.0, 30.0));
+        }
+        k => panic!("{k:?}"),
+    }
+    match s.lights[0].at_time(2.0) {
+        LightKind::Spot { position, .. } => {
+            assert!(approx(position, Vec3::new(2.0, 1.0, 0.0), 1e-6))
+        }
+        k => panic!("{k:?}"),
+    }
+}
+
+#[test]
+fn keyframes_interpolate() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = tri_scene(
+        dir.path(),
+        "dynamic = true\nkeyframes = [ { time = 0, translate = [0, 0, 0] }, { time = 2, translate = [2, 0, 0], rotate = [0, 90, 0], scale = 3 } ]\n",
+    );
+    let s = load_default(&p).unwrap();
+    let o = &s.objects[0];
+    let mid = o.model_matrix(1.0);
+    assert!(approx(mid.transform_point3(Vec3::ZERO), Vec3::new(1.0, 0.0, 0.0), 1e-6));
+    // Halfway: 45 degrees about y and scale 2.
+    let x = mid.transform_vector3(Vec3::X);
+    let h = std::f32::consts::FRAC_1_SQRT_2 * 2.0;
+    assert!(approx(x, Vec3::new(h, 0.0, -h), 1e-5), "{x}");
+    // Clamped at the ends.
+    assert!(approx(o.model_matrix(5.0).transform_point3(Vec3::ZERO), Vec3::new(2.0, 0.0, 0.0), 1e-6));
+    assert!(approx(o.model_matrix(-1.0).transform_point3(Vec3::ZERO), Vec3::ZERO, 1e-6));
+}

@@ -1,0 +1,316 @@
+//! The in-memory scene model: what the loader produces and the renderer consumes.
+//!
+//! Units: positions in scene units (the shipped scenes use metres); colours are linear RGB;
+//! see the README's scene-format section for the light units.
+
+use glam::{Mat4, Vec2, Vec3};
+use std::path::PathBuf;
+
+/// A loaded, validated scene.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The scene file this came from (for messages).
+    pub path: PathBuf,
+    pub name: String,
+    /// Geometry in object space. Each mesh has exactly one material.
+    pub meshes: Vec<Mesh>,
+    /// Instances of meshes with a transform; every mesh belongs to exactly one object.
+    pub objects: Vec<Object>,
+    pub materials: Vec<Material>,
+    /// Decoded textures, referenced by `Material::albedo_texture`.
+    pub textures: Vec<Texture>,
+    pub camera: Camera,
+    pub lights: Vec<Light>,
+    pub settings: RenderSettings,
+    /// Bounds given by the scene file (used by the voxel grid); `None` means "fit to geometry".
+    pub bounds: Option<Aabb>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    pub const EMPTY: Aabb = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+    pub fn is_empty(&self) -> bool {
+        self.min.cmpgt(self.max).any()
+    }
+    pub fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+    pub fn union(&self, o: &Aabb) -> Aabb {
+        Aabb { min: self.min.min(o.min), max: self.max.max(o.max) }
+    }
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+    pub fn extent(&self) -> Vec3 {
+        self.max - self.min
+    }
+    /// The box of the eight transformed corners.
+    pub fn transformed(&self, m: &Mat4) -> Aabb {
+        let mut out = Aabb::EMPTY;
+        for i in 0..8 {
+            let c = Vec3::new(
+                if i & 1 == 0 { self.min.x } else { self.max.x },
+                if i & 2 == 0 { self.min.y } else { self.max.y },
+                if i & 4 == 0 { self.min.z } else { self.max.z },
+            );
+            out.grow(m.transform_point3(c));
+        }
+        out
+    }
+}
+
+/// Triangle mesh in object space. `normals` and `uvs` have one entry per position
+/// (the loader generates flat/smooth normals where the file has none, and zero UVs).
+#[derive(Debug, Clone)]
+pub struct Mesh {
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
+    /// Triangle list.
+    pub indices: Vec<u32>,
+    /// Index into `Scene::materials`.
+    pub material: u32,
+    /// Object-space bounds of `positions`.
+    pub bounds: Aabb,
+}
+
+#[derive(Debug, Clone)]
+pub struct Object {
+    pub name: String,
+    /// Indices into `Scene::meshes`.
+    pub meshes: Vec<u32>,
+    /// Static placement (applied before motion).
+    pub transform: Mat4,
+    /// Dynamic objects are re-voxelized when they move; static ones are voxelized once.
+    pub dynamic: bool,
+    pub motion: Motion,
+}
+
+impl Object {
+    /// Object-to-world matrix at time `t` seconds.
+    pub fn model_matrix(&self, t: f32) -> Mat4 {
+        self.motion.matrix(t) * self.transform
+    }
+}
+
+/// Motion over time, as a world-space matrix applied after the static transform.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub enum Motion {
+    #[default]
+    None,
+    /// Parametric: rotation about `axis` through `pivot` at `degrees_per_second`, then a
+    /// translation of `velocity * t + amplitude * sin(2*pi*t/period)`.
+    Parametric { axis: Vec3, pivot: Vec3, degrees_per_second: f32, velocity: Vec3, amplitude: Vec3, period: f32 },
+    /// Keyframes sorted by time, linearly interpolated (rotation by slerp), clamped at the ends.
+    Keyframes(Vec<Keyframe>),
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Keyframe {
+    pub time: f32,
+    pub translate: Vec3,
+    /// Rotation in degrees about X, then Y, then Z.
+    pub rotate_deg: Vec3,
+    pub scale: Vec3,
+}
+
+impl Motion {
+    pub fn is_static(&self) -> bool {
+        matches!(self, Motion::None)
+    }
+    /// World-space matrix at time `t` (seconds).
+    pub fn matrix(&self, t: f32) -> Mat4 {
+        match self {
+            Motion::None => Mat4::IDENTITY,
+            Motion::Parametric { axis, pivot, degrees_per_second, velocity, amplitude, period } => {
+                let rot = if axis.length_squared() > 0.0 && *degrees_per_second != 0.0 {
+                    Mat4::from_translation(*pivot)
+                        * Mat4::from_axis_angle(axis.normalize(), (degrees_per_second * t).to_radians())
+                        * Mat4::from_translation(-*pivot)
+                } else {
+                    Mat4::IDENTITY
+                };
+                let osc =
+                    if *period > 0.0 { *amplitude * (std::f32::consts::TAU * t / period).sin() } else { Vec3::ZERO };
+                Mat4::from_translation(*velocity * t + osc) * rot
+            }
+            Motion::Keyframes(keys) => {
+                let Some(first) = keys.first() else {
+                    return Mat4::IDENTITY;
+                };
+                let key_at = |k: &Keyframe| (k.translate, euler_quat(k.rotate_deg), k.scale);
+                let (tr, rot, sc) = if t <= first.time || keys.len() == 1 {
+                    key_at(first)
+                } else if let Some(i) = keys.windows(2).position(|w| t < w[1].time) {
+                    let (a, b) = (&keys[i], &keys[i + 1]);
+                    let span = (b.time - a.time).max(f32::MIN_POSITIVE);
+                    let f = ((t - a.time) / span).clamp(0.0, 1.0);
+                    let (ta, ra, sa) = key_at(a);
+                    let (tb, rb, sb) = key_at(b);
+                    (ta.lerp(tb, f), ra.slerp(rb, f), sa.lerp(sb, f))
+                } else {
+                    key_at(keys.last().unwrap())
+                };
+                Mat4::from_scale_rotation_translation(sc, rot, tr)
+            }
+        }
+    }
+}
+
+/// Rotation from degrees about X, then Y, then Z (applied in that order to a point).
+pub fn euler_quat(deg: Vec3) -> glam::Quat {
+    let r = deg * (std::f32::consts::PI / 180.0);
+    glam::Quat::from_euler(glam::EulerRot::ZYX, r.z, r.y, r.x)
+}
+
+/// Lambert + energy-normalised Blinn-Phong material. All colours linear.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Diffuse albedo (reflectance in [0,1]); the BRDF is albedo/pi.
+    pub albedo: Vec3,
+    /// Multiplies `albedo` when present (texture is sRGB-encoded, decoded to linear on sampling).
+    pub albedo_texture: Option<u32>,
+    /// Specular reflectance Ks; the lobe is Ks * (n+8)/(8 pi) * (N.H)^n.
+    pub specular: Vec3,
+    /// Blinn-Phong exponent n (Ns), >= 0.
+    pub shininess: f32,
+    /// Emitted radiance, W/(sr m^2) per channel.
+    pub emission: Vec3,
+}
+
+impl Material {
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+    pub fn is_glossy(&self) -> bool {
+        self.specular.max_element() > 0.0
+    }
+}
+
+/// RGBA8 texels, sRGB-encoded, row-major, top row first.
+#[derive(Debug, Clone)]
+pub struct Texture {
+    pub path: PathBuf,
+    pub width: u32,
+    pub height: u32,
+    pub rgba8: Vec<u8>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Camera {
+    pub position: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+    /// Vertical field of view in degrees.
+    pub fov_y_deg: f32,
+    pub near: f32,
+    pub far: f32,
+}
+
+impl Camera {
+    pub fn view(&self) -> Mat4 {
+        Mat4::look_at_rh(self.position, self.target, self.up)
+    }
+    /// Vulkan clip space (y down, depth 0..1).
+    pub fn projection(&self, aspect: f32) -> Mat4 {
+        let mut p = Mat4::perspective_rh(self.fov_y_deg.to_radians(), aspect, self.near, self.far);
+        p.y_axis.y = -p.y_axis.y;
+        p
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum LightKind {
+    /// `direction` is the direction the light travels (from the light towards the scene),
+    /// `irradiance` in W/m^2 per channel on a surface facing the light.
+    Directional { direction: Vec3, irradiance: Vec3 },
+    /// `intensity` in W/sr per channel.
+    Point { position: Vec3, intensity: Vec3 },
+    /// `intensity` in W/sr per channel on the axis; full inside `inner_deg`, smooth falloff to
+    /// zero at `outer_deg` (half-angles from the axis, degrees).
+    Spot { position: Vec3, direction: Vec3, intensity: Vec3, inner_deg: f32, outer_deg: f32 },
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Light {
+    pub name: String,
+    pub kind: LightKind,
+    pub cast_shadows: bool,
+    /// Applied to position and direction.
+    pub motion: Motion,
+}
+
+impl Light {
+    /// The light with its motion applied at time `t`.
+    pub fn at_time(&self, t: f32) -> LightKind {
+        let m = self.motion.matrix(t);
+        match &self.kind {
+            LightKind::Directional { direction, irradiance } => LightKind::Directional {
+                direction: m.transform_vector3(*direction).normalize_or_zero(),
+                irradiance: *irradiance,
+            },
+            LightKind::Point { position, intensity } => {
+                LightKind::Point { position: m.transform_point3(*position), intensity: *intensity }
+            }
+            LightKind::Spot { position, direction, intensity, inner_deg, outer_deg } => LightKind::Spot {
+                position: m.transform_point3(*position),
+                direction: m.transform_vector3(*direction).normalize_or_zero(),
+                intensity: *intensity,
+                inner_deg: *inner_deg,
+                outer_deg: *outer_deg,
+            },
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ToneMap {
+    /// Narkowicz's fitted ACES filmic curve.
+    Aces,
+    /// Reinhard x/(1+x) per channel.
+    Reinhard,
+    /// Clamp to [0,1]: no curve.
+    Clamp,
+}
+
+/// Per-scene render settings (the `[render]` table).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Scene time in seconds at which motion is evaluated.
+    pub time: f32,
+    /// Exposure in EV stops: displayed value = radiance * 2^exposure before the tone map.
+    pub exposure: f32,
+    pub tonemap: ToneMap,
+    /// Side of each shadow-map view in texels.
+    pub shadow_map_size: u32,
+    /// PCF kernel radius in shadow-map texels (0 = single hardware-filtered tap).
+    pub shadow_filter_radius: f32,
+    /// Depth bias in shadow-map texels along the surface normal.
+    pub shadow_normal_bias: f32,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 512,
+            height: 512,
+            time: 0.0,
+            exposure: 0.0,
+            tonemap: ToneMap::Aces,
+            shadow_map_size: 1024,
+            shadow_filter_radius: 1.5,
+            shadow_normal_bias: 1.5,
+        }
+    }
+}

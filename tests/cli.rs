@@ -1,0 +1,249 @@
+//! The `dvsgi` binary end to end: every bad input gives one clear message naming the file,
+//! a non-zero exit, no panic and no output file; `info` reports the queue topology.
+
+mod common;
+
+use common::repo;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn dvsgi(args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_dvsgi"));
+    c.args(args).current_dir(repo()).env("DVSGI_VALIDATION", "1");
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    c.output().expect("run dvsgi")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+/// Runs a render that must fail: returns stderr after checking exit code, no panic, no file.
+fn render_fails(scene: &Path, extra: &[&str], env: &[(&str, &str)]) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out.png");
+    let mut args =
+        vec!["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--width", "32", "--height", "32"];
+    args.extend_from_slice(extra);
+    let o = dvsgi(&args, env);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "expected failure, got success; stderr:\n{err}");
+    assert_eq!(o.status.code(), Some(1), "exit code; stderr:\n{err}");
+    assert!(!err.contains("panicked"), "panic:\n{err}");
+    assert!(err.contains("error: "), "no error line:\n{err}");
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert!(left.is_empty(), "files left behind: {left:?}");
+    err
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+const CAMERA: &str = "[camera]\nposition = [0, 0, 3]\ntarget = [0, 0, 0]\n";
+const LIGHT: &str = "[[lights]]\ntype = \"point\"\nposition = [0, 2, 2]\nintensity = [5, 5, 5]\n";
+
+fn scene_with_obj(dir: &Path, obj: &str, mtl: Option<&str>) -> PathBuf {
+    write(dir, "m.obj", obj);
+    if let Some(m) = mtl {
+        write(dir, "m.mtl", m);
+    }
+    write(dir, "s.toml", &format!("{CAMERA}\n[[objects]]\nobj = \"m.obj\"\n\n{LIGHT}"))
+}
+
+#[test]
+fn render_writes_png_and_exr() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("a.png");
+    let exr = dir.path().join("a.exr");
+    let o = dvsgi(
+        &[
+            "render",
+            "scenes/cornell-box.toml",
+            "--out",
+            png.to_str().unwrap(),
+            "--out",
+            exr.to_str().unwrap(),
+            "--width",
+            "40",
+            "--height",
+            "30",
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("validation"), "{}", stderr(&o));
+    assert_eq!(image::open(&png).unwrap().to_rgb8().dimensions(), (40, 30));
+    assert_eq!(dvsgi::output::read_rgb_f32(&exr).unwrap().width, 40);
+}
+
+#[test]
+fn info_reports_device_and_queue_topology() {
+    let o = dvsgi(&["info", "scenes/cornell-box.toml"], &[]);
+    let out = stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.contains("queue topology:"), "{out}");
+    assert!(out.contains("passes: shadow maps -> gbuffer -> deferred lighting -> tonemap"), "{out}");
+    for f in ["timelineSemaphore", "synchronization2", "dynamicRendering", "maintenance4"] {
+        assert!(out.contains(f), "{f} missing:\n{out}");
+    }
+    if out.contains("llvmpipe") {
+        // lavapipe has one queue family with one queue.
+        assert!(out.contains("single-queue fallback"), "{out}");
+        assert!(out.contains("compute queue: family 0 index 0"), "{out}");
+    }
+}
+
+#[test]
+fn no_vulkan_device_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let none = dir.path().join("none.json");
+    let env = [("VK_DRIVER_FILES", none.to_str().unwrap()), ("VK_ICD_FILENAMES", none.to_str().unwrap())];
+    let err = render_fails(&repo().join("scenes/cornell-box.toml"), &[], &env);
+    assert!(err.contains("mesa-vulkan-drivers"), "{err}");
+}
+
+#[test]
+fn unknown_device_lists_the_available_ones() {
+    let err = render_fails(&repo().join("scenes/cornell-box.toml"), &["--device", "no-such-gpu"], &[]);
+    assert!(err.contains("no-such-gpu") && err.contains("[0]"), "{err}");
+}
+
+#[test]
+fn missing_scene_file() {
+    let err = render_fails(Path::new("scenes/does-not-exist.toml"), &[], &[]);
+    assert!(err.contains("does-not-exist.toml"), "{err}");
+}
+
+#[test]
+fn malformed_toml_names_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "bad.toml", "[camera]\nposition = [0, 0, 3]\ntarget = [0, 0\n");
+    let err = render_fails(&p, &[], &[]);
+    assert!(err.contains("bad.toml") && err.contains("line 3"), "{err}");
+}
+
+#[test]
+fn unknown_key_in_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "k.toml", &format!("{CAMERA}fov = 3\n"));
+    let err = render_fails(&p, &[], &[]);
+    assert!(err.contains("k.toml") && err.contains("fov"), "{err}");
+}
+
+#[test]
+fn unknown_set_key_is_named() {
+    let err = render_fails(&repo().join("scenes/cornell-box.toml"), &["--set", "camera.fovy=45"], &[]);
+    assert!(err.contains("camera.fovy"), "{err}");
+    let err = render_fails(&repo().join("scenes/cornell-box.toml"), &["--set", "camera.fov_y"], &[]);
+    assert!(err.contains("KEY=VALUE"), "{err}");
+}
+
+#[test]
+fn impossible_settings_are_refused() {
+    let err = render_fails(&repo().join("scenes/cornell-box.toml"), &["--set", "camera.fov_y=-5"], &[]);
+    assert!(err.contains("fov_y"), "{err}");
+    let err = render_fails(&repo().join("scenes/cornell-box.toml"), &["--set", "render.shadow_map_size=0"], &[]);
+    assert!(err.contains("shadow_map_size"), "{err}");
+}
+
+#[test]
+fn missing_obj_lists_where_it_looked() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "s.toml", &format!("{CAMERA}[[objects]]\nobj = \"nowhere.obj\"\n"));
+    let err = render_fails(&p, &[], &[]);
+    assert!(err.contains("nowhere.obj") && err.contains("s.toml"), "{err}");
+}
+
+#[test]
+fn malformed_obj_names_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = scene_with_obj(dir.path(), "v 0 0 0\nv 1 0 0\nv 0 1 abc\nf 1 2 3\n", None);
+    let err = render_fails(&p, &[], &[]);
+    assert!(err.contains("m.obj") && err.contains("line 3"), "{err}");
+}
+
+#[test]
+fn obj_index_out_of_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = scene_with_obj(dir.path(), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n", None);
+    let err = render_fails(&p, &[], &[]);
+    assert!(err.contains("m.obj") && err.contains("line 4"), "{err}");
+}
+
+#[test]
+fn missing_mtl_names_both_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = scene_with_obj(dir.path(), "mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n", None);
+    let err = render_fails(&p, &[], &[]);
+    assert!(err.contains("gone.mtl") && err.contains("m.obj"), "{err}");
+}
+
+#[test]
+fn malformed_mtl_names_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = scene_with_obj(
+        dir.path(),
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n",
+        Some("newmtl a\nKd 0.5 0.5\n"),
+    );
+    let err = render_fails(&p, &[], &[]);
+    assert!(err.contains("m.mtl") && err.contains("line 2"), "{err}");
+}
+
+#[test]
+fn missing_and_corrupt_textures() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl a\nf 1/1 2/1 3/1\n";
+    let p = scene_with_obj(dir.path(), obj, Some("newmtl a\nKd 1 1 1\nmap_Kd missing.png\n"));
+    let err = render_fails(&p, &[], &[]);
+    assert!(err.contains("missing.png") && err.contains("m.mtl"), "{err}");
+    write(dir.path(), "bad.png", "this is not a png");
+    write(dir.path(), "m.mtl", "newmtl a\nKd 1 1 1\nmap_Kd bad.png\n");
+    let err = render_fails(&p, &[], &[]);
+    assert!(err.contains("bad.png"), "{err}");
+}
+
+#[test]
+fn textured_material_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let tex = image::RgbaImage::from_fn(4, 4, |x, _| {
+        if x < 2 {
+            image::Rgba([255, 0, 0, 255])
+        } else {
+            image::Rgba([0, 0, 255, 255])
+        }
+    });
+    tex.save(dir.path().join("t.png")).unwrap();
+    let obj = "mtllib m.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nusemtl a\nf 1/1/1 2/2/1 3/3/1 4/4/1\n";
+    let p = scene_with_obj(dir.path(), obj, Some("newmtl a\nKd 1 1 1\nmap_Kd t.png\n"));
+    let exr = dir.path().join("o.exr");
+    let o =
+        dvsgi(&["render", p.to_str().unwrap(), "--out", exr.to_str().unwrap(), "--width", "32", "--height", "32"], &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = dvsgi::output::read_rgb_f32(&exr).unwrap();
+    let at = |x: u32, y: u32| {
+        let i = ((y * img.width + x) * 3) as usize;
+        [img.data[i], img.data[i + 1], img.data[i + 2]]
+    };
+    // Left half red, right half blue (the quad fills the middle of the view).
+    let (l, r) = (at(12, 16), at(20, 16));
+    assert!(l[0] > 0.0 && l[1] == 0.0 && l[2] == 0.0, "left {l:?}");
+    assert!(r[2] > 0.0 && r[0] == 0.0 && r[1] == 0.0, "right {r:?}");
+}
+
+#[test]
+fn bad_output_targets() {
+    let err = render_fails(&repo().join("scenes/cornell-box.toml"), &["--out", "/tmp/x.bmp"], &[]);
+    assert!(err.contains("x.bmp") && err.contains(".png"), "{err}");
+    let err = render_fails(&repo().join("scenes/cornell-box.toml"), &["--out", "/nonexistent-dir/x.png"], &[]);
+    assert!(err.contains("/nonexistent-dir"), "{err}");
+}

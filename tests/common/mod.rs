@@ -1,0 +1,123 @@
+//! Helpers shared by the GPU tests: a validated lavapipe context, rendering a scene file,
+//! and a CPU ray caster over the scene's own triangles for picking test points.
+#![allow(dead_code)]
+
+use dvsgi::gpu::{Context, ContextDesc};
+use dvsgi::render::{FrameOutput, Renderer};
+use dvsgi::scene::{self, LoadOptions, Scene};
+use glam::{Vec3, Vec4};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+pub fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A context with the validation layer on (tests always validate).
+pub fn context() -> Arc<Context> {
+    Context::new(&ContextDesc { validation: true, device: None })
+        .expect("a Vulkan 1.3 device (lavapipe: apt-get install mesa-vulkan-drivers)")
+}
+
+pub fn load(path: &Path, overrides: &[(&str, &str)]) -> Scene {
+    scene::load(
+        path,
+        &LoadOptions {
+            overrides: overrides.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect(),
+            asset_paths: vec![],
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Render one frame and fail on any validation message.
+pub fn render(ctx: &Arc<Context>, scene: Scene) -> (FrameOutput, Scene) {
+    let t = scene.settings.time;
+    let kept = scene.clone();
+    let mut r = Renderer::new(ctx, scene).expect("renderer");
+    r.render(t, true).expect("frame");
+    let out = r.output();
+    drop(r);
+    assert_no_validation_messages(ctx);
+    (out, kept)
+}
+
+pub fn assert_no_validation_messages(ctx: &Context) {
+    let v = ctx.validation();
+    assert_eq!((v.errors(), v.warnings()), (0, 0), "validation messages:\n{}", v.messages().join("\n"));
+}
+
+pub struct Triangle {
+    pub a: Vec3,
+    pub b: Vec3,
+    pub c: Vec3,
+    pub material: u32,
+}
+
+/// World-space triangles of the scene at time t.
+pub fn triangles(scene: &Scene, t: f32) -> Vec<Triangle> {
+    let mut out = Vec::new();
+    for o in &scene.objects {
+        let m = o.model_matrix(t);
+        for &mi in &o.meshes {
+            let mesh = &scene.meshes[mi as usize];
+            for tri in mesh.indices.chunks_exact(3) {
+                let p = |i: u32| m.transform_point3(mesh.positions[i as usize]);
+                out.push(Triangle { a: p(tri[0]), b: p(tri[1]), c: p(tri[2]), material: mesh.material });
+            }
+        }
+    }
+    out
+}
+
+/// Nearest hit (distance, triangle index) of the ray o + t d, t in (tmin, tmax).
+pub fn raycast(tris: &[Triangle], o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<(f32, usize)> {
+    let mut best: Option<(f32, usize)> = None;
+    for (i, t) in tris.iter().enumerate() {
+        let e1 = t.b - t.a;
+        let e2 = t.c - t.a;
+        let p = d.cross(e2);
+        let det = e1.dot(p);
+        if det.abs() < 1e-12 {
+            continue;
+        }
+        let inv = 1.0 / det;
+        let s = o - t.a;
+        let u = s.dot(p) * inv;
+        if !(0.0..=1.0).contains(&u) {
+            continue;
+        }
+        let q = s.cross(e1);
+        let v = d.dot(q) * inv;
+        if v < 0.0 || u + v > 1.0 {
+            continue;
+        }
+        let dist = e2.dot(q) * inv;
+        if dist > tmin && dist < tmax && best.map(|b| dist < b.0).unwrap_or(true) {
+            best = Some((dist, i));
+        }
+    }
+    best
+}
+
+/// The camera ray through the centre of pixel (x, y), as the renderer defines it.
+pub fn camera_ray(scene: &Scene, x: u32, y: u32) -> (Vec3, Vec3) {
+    let (w, h) = (scene.settings.width as f32, scene.settings.height as f32);
+    let vp = scene.camera.projection(w / h) * scene.camera.view();
+    let inv = vp.inverse();
+    let ndc_x = (x as f32 + 0.5) / w * 2.0 - 1.0;
+    let ndc_y = (y as f32 + 0.5) / h * 2.0 - 1.0;
+    let far = inv * Vec4::new(ndc_x, ndc_y, 1.0, 1.0);
+    let far = far.truncate() / far.w;
+    let o = scene.camera.position;
+    (o, (far - o).normalize())
+}
+
+/// Pixel containing world point p.
+pub fn project(scene: &Scene, p: Vec3) -> (u32, u32) {
+    let (w, h) = (scene.settings.width as f32, scene.settings.height as f32);
+    let vp = scene.camera.projection(w / h) * scene.camera.view();
+    let c = vp * p.extend(1.0);
+    let ndc = c.truncate() / c.w;
+    (((ndc.x * 0.5 + 0.5) * w).floor() as u32, ((ndc.y * 0.5 + 0.5) * h).floor() as u32)
+}
