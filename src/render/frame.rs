@@ -20,8 +20,8 @@ pub struct FramePasses {
     pub gbuffer: GBufferPass,
     pub lighting: LightingPass,
     pub tonemap: TonemapPass,
-    pub readback: ReadbackPass,
-    pub host_read: HostReadPass,
+    /// Created on the first frame whose output is read back (not for benchmarks).
+    pub readback: Option<(ReadbackPass, HostReadPass)>,
 }
 
 pub const RADIANCE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -73,18 +73,27 @@ impl FramePasses {
         )?);
         let shadow =
             if shadow_views > 0 { Some(ShadowPass::new(ctx, scene, frame, &atlas, shadow_views)?) } else { None };
-        let readback = ReadbackPass::new(ctx, &radiance, &display)?;
         Ok(FramePasses {
             shadow,
             gbuffer: GBufferPass::new(ctx, scene, frame, &gbuffer)?,
             lighting: LightingPass::new(ctx, frame, &gbuffer, &atlas, &radiance)?,
             tonemap: TonemapPass::new(ctx, frame, &radiance, &display)?,
-            host_read: HostReadPass::new(&readback),
-            readback,
+            readback: None,
         })
     }
 
-    /// The frame, in dependency order. `readback`: copy the results for the host.
+    /// Create the readback passes if they do not exist yet.
+    pub fn ensure_readback(&mut self, ctx: &Arc<Context>) -> GpuResult<()> {
+        if self.readback.is_none() {
+            let rb = ReadbackPass::new(ctx, &self.lighting.radiance, &self.tonemap.display)?;
+            let host = HostReadPass::new(&rb);
+            self.readback = Some((rb, host));
+        }
+        Ok(())
+    }
+
+    /// The frame, in dependency order. `readback`: copy the results for the host (after
+    /// `ensure_readback`).
     pub fn list(&self, readback: bool) -> Vec<&dyn Pass> {
         let mut passes: Vec<&dyn Pass> = Vec::new();
         if let Some(shadow) = &self.shadow {
@@ -93,9 +102,9 @@ impl FramePasses {
         passes.push(&self.gbuffer);
         passes.push(&self.lighting);
         passes.push(&self.tonemap);
-        if readback {
-            passes.push(&self.readback);
-            passes.push(&self.host_read);
+        if let (true, Some((copy, host))) = (readback, &self.readback) {
+            passes.push(copy);
+            passes.push(host);
         }
         passes
     }

@@ -209,8 +209,11 @@ impl Renderer {
     /// Render one frame at scene time `t`, wait for it (with a timeout), and return its timing.
     pub fn render(&mut self, t: f32, readback: bool) -> GpuResult<FrameStats> {
         let start = Instant::now();
-        self.update(t);
         let ctx = self.ctx.clone();
+        if readback {
+            self.passes.ensure_readback(&ctx)?;
+        }
+        self.update(t);
         let d = &ctx.device;
         unsafe {
             d.reset_command_buffer(self.cmd, vk::CommandBufferResetFlags::empty()).vk("vkResetCommandBuffer")?;
@@ -239,8 +242,11 @@ impl Renderer {
     }
 
     /// The last frame rendered with `readback = true`.
+    ///
+    /// # Panics
+    /// If no frame was rendered with `readback = true`.
     pub fn output(&self) -> FrameOutput {
-        let rb = &self.passes.readback;
+        let (rb, _) = self.passes.readback.as_ref().expect("render(t, true) before output()");
         let n = (self.width * self.height * 4) as usize;
         let radiance_bytes = rb.radiance_buffer.mapped().expect("host-visible readback");
         let display_bytes = rb.display_buffer.mapped().expect("host-visible readback");
