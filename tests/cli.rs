@@ -91,7 +91,8 @@ fn info_reports_device_and_queue_topology() {
     let out = stdout(&o);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.contains("queue topology:"), "{out}");
-    assert!(out.contains("passes: shadow maps -> gbuffer -> deferred lighting -> tonemap"), "{out}");
+    assert!(out.contains("passes (first frame): shadow maps -> gbuffer -> deferred lighting -> tonemap"), "{out}");
+    assert!(!out.contains("voxel"), "no voxel passes or volumes without GI:\n{out}");
     for f in ["timelineSemaphore", "synchronization2", "dynamicRendering", "maintenance4"] {
         assert!(out.contains(f), "{f} missing:\n{out}");
     }
@@ -100,6 +101,65 @@ fn info_reports_device_and_queue_topology() {
         assert!(out.contains("single-queue fallback"), "{out}");
         assert!(out.contains("compute queue: family 0 index 0"), "{out}");
     }
+}
+
+/// With voxel GI on a static scene: voxel clear + static voxelization, albedo and normal
+/// volumes with their memory, and no emission volume, flag volume or dynamic passes.
+#[test]
+fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
+    let o =
+        dvsgi(&["info", "scenes/cornell-box.toml", "--set", "gi.mode=\"vct\"", "--set", "gi.voxel_resolution=32"], &[]);
+    let out = stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.contains("voxel clear -> voxelize static -> shadow maps"), "{out}");
+    assert!(out.contains("volume voxel albedo: 0.12 MiB") && out.contains("volume voxel normal: 0.12 MiB"), "{out}");
+    for absent in ["voxel emission", "voxel static flags", "voxel clear dynamic", "voxelize dynamic"] {
+        assert!(!out.contains(absent), "{absent} should not exist:\n{out}");
+    }
+    let o = dvsgi(&["info", "scenes/dynamic-test.toml", "--gi", "vct"], &[]);
+    assert!(!o.status.success(), "info takes --set, not --gi");
+    let o = dvsgi(
+        &["info", "scenes/dynamic-test.toml", "--set", "gi.mode=\"vct\"", "--set", "gi.voxel_resolution=16"],
+        &[],
+    );
+    let out = stdout(&o);
+    assert!(out.contains("voxel clear dynamic -> voxelize dynamic"), "{out}");
+    assert!(out.contains("volume voxel static flags"), "{out}");
+}
+
+#[test]
+fn voxel_view_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("v.png");
+    let o = dvsgi(
+        &[
+            "render",
+            "scenes/cornell-box.toml",
+            "--view",
+            "voxel-normal",
+            "--set",
+            "gi.voxel_resolution=16",
+            "--out",
+            png.to_str().unwrap(),
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "-v",
+        ],
+        &[],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("passes: voxel clear -> voxelize static -> voxel view -> tonemap"), "{out}");
+    let img = image::open(&png).unwrap().to_rgb8();
+    // The floor's normal (0, 1, 0) shows as (0.5, 1, 0.5): green-dominant pixels along the
+    // bottom rows; the ceiling's (0, -1, 0) as (0.5, 0, 0.5) along the top.
+    let count = |rows: std::ops::Range<u32>, f: &dyn Fn(&image::Rgb<u8>) -> bool| {
+        rows.flat_map(|y| (0..32).map(move |x| (x, y))).filter(|&(x, y)| f(img.get_pixel(x, y))).count()
+    };
+    assert!(count(28..32, &|p| p[1] > p[0] + 20 && p[1] > p[2] + 20) >= 8, "floor");
+    assert!(count(0..3, &|p| p[0] > p[1] + 20 && p[2] > p[1] + 20) >= 8, "ceiling");
 }
 
 #[test]

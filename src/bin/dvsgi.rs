@@ -40,6 +40,13 @@ enum Command {
         /// Scene time in seconds at which motion is evaluated (overrides render.time).
         #[arg(long)]
         time: Option<f32>,
+        /// What to show: final | voxel-albedo | voxel-normal | voxel-emission
+        /// (overrides render.view).
+        #[arg(long)]
+        view: Option<String>,
+        /// Global illumination: none | vct (overrides gi.mode).
+        #[arg(long)]
+        gi: Option<String>,
         /// Print the passes, the barriers and timings.
         #[arg(long, short)]
         verbose: bool,
@@ -60,7 +67,7 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> dvsgi::Result<()> {
     match cli.command {
         Command::Info { scene } => info(&cli.common, scene),
-        Command::Render { scene, out, width, height, time, verbose } => {
+        Command::Render { scene, out, width, height, time, view, gi, verbose } => {
             // Fail on unwritable targets before doing any work.
             for o in &out {
                 dvsgi::output::check_target(o)?;
@@ -75,6 +82,12 @@ fn run(cli: Cli) -> dvsgi::Result<()> {
             if let Some(t) = time {
                 extra.push(("render.time".to_string(), format!("{t:?}")));
             }
+            if let Some(v) = view {
+                extra.push(("render.view".to_string(), format!("{v:?}")));
+            }
+            if let Some(g) = gi {
+                extra.push(("gi.mode".to_string(), format!("{g:?}")));
+            }
             let scene = cli.common.load_scene(&scene, &extra)?;
             let ctx = cli.common.context()?;
             let t = scene.settings.time;
@@ -82,7 +95,8 @@ fn run(cli: Cli) -> dvsgi::Result<()> {
             let stats = renderer.render(t, true)?;
             if verbose {
                 println!("device: {} ({})", ctx.info.name, ctx.info.driver_info);
-                println!("passes: {}", renderer.pass_names(true).join(" -> "));
+                let names: Vec<_> = stats.passes.iter().map(|p| p.name.as_str()).collect();
+                println!("passes: {}", names.join(" -> "));
                 for b in &renderer.last_barriers {
                     println!("  barrier {b}");
                 }
@@ -159,7 +173,10 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
         );
         let before = ctx.allocated_bytes();
         let renderer = Renderer::new(&ctx, scene)?;
-        println!("  passes: {}", renderer.pass_names(false).join(" -> "));
+        println!("  passes (first frame): {}", renderer.pass_names(false).join(" -> "));
+        for (name, bytes) in renderer.images() {
+            println!("  volume {name}: {:.2} MiB", bytes as f64 / (1024.0 * 1024.0));
+        }
         println!(
             "  GPU memory allocated for the scene and frame: {:.2} MiB",
             (ctx.allocated_bytes() - before) as f64 / (1024.0 * 1024.0)

@@ -503,7 +503,8 @@ impl Context {
             .sampler_anisotropy(optional.sampler_anisotropy)
             .shader_storage_image_write_without_format(has10.shader_storage_image_write_without_format != 0)
             .shader_storage_image_read_without_format(has10.shader_storage_image_read_without_format != 0)
-            .independent_blend(has10.independent_blend != 0);
+            .independent_blend(has10.independent_blend != 0)
+            .shader_storage_image_extended_formats(has10.shader_storage_image_extended_formats != 0);
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
             .timeline_semaphore(true)
             .scalar_block_layout(has12.scalar_block_layout != 0)

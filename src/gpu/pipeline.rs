@@ -319,13 +319,19 @@ impl Pipeline {
         let input_assembly =
             vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
         let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
-        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+        let mut conservative = vk::PipelineRasterizationConservativeStateCreateInfoEXT::default()
+            .conservative_rasterization_mode(vk::ConservativeRasterizationModeEXT::OVERESTIMATE)
+            .extra_primitive_overestimation_size(0.0);
+        let mut raster = vk::PipelineRasterizationStateCreateInfo::default()
             .polygon_mode(vk::PolygonMode::FILL)
             .cull_mode(desc.cull)
             .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .depth_bias_enable(desc.depth_bias)
             .depth_clamp_enable(desc.depth_clamp && ctx.info.optional.depth_clamp)
             .line_width(1.0);
+        if desc.conservative && ctx.info.optional.conservative_rasterization {
+            raster = raster.push_next(&mut conservative);
+        }
         let multisample =
             vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
         let depth = vk::PipelineDepthStencilStateCreateInfo::default()
@@ -406,6 +412,9 @@ pub struct GraphicsDesc<'a> {
     pub depth_bias: bool,
     /// Clamp depth instead of clipping (shadow casters behind a directional light's near plane).
     pub depth_clamp: bool,
+    /// Overestimating conservative rasterization (VK_EXT_conservative_rasterization; only
+    /// when the device has it).
+    pub conservative: bool,
     pub spec: &'a [(u32, u32)],
 }
 

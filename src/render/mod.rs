@@ -6,12 +6,13 @@ pub mod graph;
 pub mod lights;
 pub mod passes;
 pub mod scene_gpu;
+pub mod voxel;
 
 use crate::gpu::{Buffer, Context, GpuError, GpuResult, VkContext};
 use crate::scene::{Scene, ToneMap};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
-use frame::FramePasses;
+use frame::{FramePasses, FrameState};
 use gpu_allocator::MemoryLocation;
 use graph::{PassTime, PassTimer, StateTracker};
 use scene_gpu::SceneGpu;
@@ -76,6 +77,8 @@ pub struct Renderer {
     fence: vk::Fence,
     width: u32,
     height: u32,
+    /// Static geometry has been voxelized (by a completed frame).
+    static_voxelized: bool,
     /// Barriers of the last recorded frame, described (for `--verbose` and tests).
     pub last_barriers: Vec<String>,
 }
@@ -121,7 +124,7 @@ impl Renderer {
                 MemoryLocation::CpuToGpu,
             )?,
         };
-        let passes = FramePasses::new(ctx, &scene_gpu, &frame_buffers, width, height, shadow_views, s.shadow_map_size)?;
+        let passes = FramePasses::new(ctx, &scene, &scene_gpu, &frame_buffers, shadow_views)?;
         let timer = PassTimer::new(ctx, 16)?;
         let d = &ctx.device;
         let pool = unsafe {
@@ -147,6 +150,7 @@ impl Renderer {
             fence: vk::Fence::null(),
             width,
             height,
+            static_voxelized: false,
             last_barriers: Vec::new(),
         };
         me.cmd = unsafe {
@@ -168,9 +172,39 @@ impl Renderer {
         (self.width, self.height)
     }
 
-    /// Names of the passes a frame runs, in order.
+    /// Names of the passes the next frame runs, in order.
     pub fn pass_names(&self, readback: bool) -> Vec<String> {
-        self.passes.list(readback).iter().map(|p| p.name().to_string()).collect()
+        self.passes.list(self.frame_state(readback)).iter().map(|p| p.name().to_string()).collect()
+    }
+
+    fn frame_state(&self, readback: bool) -> FrameState {
+        FrameState { static_voxelized: self.static_voxelized, readback }
+    }
+
+    /// The voxel volumes, when the scene has them.
+    pub fn voxels(&self) -> Option<&voxel::VoxelVolumes> {
+        self.passes.voxels.as_ref().map(|v| &*v.volumes)
+    }
+
+    /// Every GPU image the frame uses with its size in bytes (for `info` and tests).
+    pub fn images(&self) -> Vec<(String, u64)> {
+        let mut out = Vec::new();
+        if let Some(v) = self.voxels() {
+            for img in v.all() {
+                out.push((img.name.clone(), img.bytes));
+            }
+        }
+        out
+    }
+
+    /// Copy an image of this renderer to the host (waits; for tests and debugging).
+    pub fn download(&mut self, image: &Arc<crate::gpu::Image>) -> GpuResult<Vec<u8>> {
+        let ctx = self.ctx.clone();
+        let copy = passes::readback::ImageDownload::new(&ctx, image)?;
+        let host = passes::readback::HostReadPass { buffers: vec![copy.buffer.clone()] };
+        self.last_barriers =
+            submit(&self.ctx, self.cmd, self.fence, &mut self.tracker, &mut self.timer, &[&copy, &host])?;
+        Ok(copy.bytes().to_vec())
     }
 
     /// Write the per-frame data for scene time `t`.
@@ -214,29 +248,12 @@ impl Renderer {
             self.passes.ensure_readback(&ctx)?;
         }
         self.update(t);
-        let d = &ctx.device;
-        unsafe {
-            d.reset_command_buffer(self.cmd, vk::CommandBufferResetFlags::empty()).vk("vkResetCommandBuffer")?;
-            d.begin_command_buffer(
-                self.cmd,
-                &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-            )
-            .vk("vkBeginCommandBuffer")?;
+        let state = self.frame_state(readback);
+        self.last_barriers =
+            submit(&ctx, self.cmd, self.fence, &mut self.tracker, &mut self.timer, &self.passes.list(state))?;
+        if self.passes.voxels.is_some() {
+            self.static_voxelized = true;
         }
-        let passes = self.passes.list(readback);
-        self.last_barriers = graph::record_passes(&ctx, self.cmd, &mut self.tracker, Some(&mut self.timer), &passes);
-        unsafe {
-            d.end_command_buffer(self.cmd).vk("vkEndCommandBuffer")?;
-            let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(self.cmd)];
-            let submit = vk::SubmitInfo2::default().command_buffer_infos(&cmds);
-            {
-                let _g = ctx.submit_lock.lock().unwrap_or_else(|p| p.into_inner());
-                d.queue_submit2(ctx.graphics_queue.raw, &[submit], self.fence).vk("vkQueueSubmit2")?;
-            }
-        }
-        let waited = ctx.wait_fences(&[self.fence], "the frame");
-        unsafe { d.reset_fences(&[self.fence]) }.vk("vkResetFences")?;
-        waited?;
         let host_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(FrameStats { host_ms, passes: self.timer.read()? })
     }
@@ -246,17 +263,46 @@ impl Renderer {
     /// # Panics
     /// If no frame was rendered with `readback = true`.
     pub fn output(&self) -> FrameOutput {
-        let (rb, _) = self.passes.readback.as_ref().expect("render(t, true) before output()");
-        let n = (self.width * self.height * 4) as usize;
-        let radiance_bytes = rb.radiance_buffer.mapped().expect("host-visible readback");
-        let display_bytes = rb.display_buffer.mapped().expect("host-visible readback");
+        let rb = self.passes.readback.as_ref().expect("render(t, true) before output()");
         FrameOutput {
             width: self.width,
             height: self.height,
-            radiance: bytemuck::pod_collect_to_vec::<u8, f32>(&radiance_bytes[..n * 4]),
-            display: display_bytes[..n].to_vec(),
+            radiance: bytemuck::pod_collect_to_vec::<u8, f32>(rb.radiance.bytes()),
+            display: rb.display.bytes().to_vec(),
         }
     }
+}
+
+/// Record `passes` into `cmd`, submit to the graphics queue and wait for `fence` (with the
+/// timeout). Returns the barrier log.
+fn submit(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    fence: vk::Fence,
+    tracker: &mut StateTracker,
+    timer: &mut PassTimer,
+    passes: &[&dyn graph::Pass],
+) -> GpuResult<Vec<String>> {
+    let d = &ctx.device;
+    unsafe {
+        d.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty()).vk("vkResetCommandBuffer")?;
+        d.begin_command_buffer(
+            cmd,
+            &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+        )
+        .vk("vkBeginCommandBuffer")?;
+    }
+    let log = graph::record_passes(ctx, cmd, tracker, Some(timer), passes);
+    unsafe {
+        d.end_command_buffer(cmd).vk("vkEndCommandBuffer")?;
+        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
+        let submit = vk::SubmitInfo2::default().command_buffer_infos(&cmds);
+        let _g = ctx.submit_lock.lock().unwrap_or_else(|p| p.into_inner());
+        d.queue_submit2(ctx.graphics_queue.raw, &[submit], fence).vk("vkQueueSubmit2")?;
+    }
+    let waited = ctx.wait_fences(&[fence], "the frame");
+    unsafe { d.reset_fences(&[fence]) }.vk("vkResetFences")?;
+    waited.map(|_| log)
 }
 
 impl Drop for Renderer {

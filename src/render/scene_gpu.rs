@@ -53,6 +53,8 @@ pub struct Draw {
     pub instance: u32,
     pub object: usize,
     pub material: u32,
+    /// The object is dynamic (re-voxelized when it moves).
+    pub dynamic: bool,
 }
 
 pub struct SceneGpu {
@@ -190,6 +192,7 @@ impl SceneGpu {
                     instance: draws.len() as u32,
                     object: oi,
                     material: mesh.material,
+                    dynamic: object.dynamic,
                 });
                 indices.extend_from_slice(&mesh.indices);
             }
@@ -291,10 +294,15 @@ impl SceneGpu {
 
     /// Bind the vertex and index buffers and issue every draw.
     pub fn draw_all(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        self.draw_where(ctx, cmd, |_| true);
+    }
+
+    /// Bind the vertex and index buffers and issue the draws `keep` selects.
+    pub fn draw_where(&self, ctx: &Context, cmd: vk::CommandBuffer, keep: impl Fn(&Draw) -> bool) {
         unsafe {
             ctx.device.cmd_bind_vertex_buffers(cmd, 0, &[self.vertices.raw], &[0]);
             ctx.device.cmd_bind_index_buffer(cmd, self.indices.raw, 0, vk::IndexType::UINT32);
-            for d in &self.draws {
+            for d in self.draws.iter().filter(|d| keep(d)) {
                 ctx.device.cmd_draw_indexed(cmd, d.index_count, 1, d.first_index, d.vertex_offset, d.instance);
             }
         }

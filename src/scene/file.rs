@@ -48,6 +48,8 @@ pub(crate) struct SceneFile {
     #[serde(default)]
     pub render: RenderDef,
     #[serde(default)]
+    pub gi: GiDef,
+    #[serde(default)]
     pub materials: Vec<MaterialDef>,
     #[serde(default)]
     pub objects: Vec<ObjectDef>,
@@ -99,6 +101,21 @@ pub(crate) struct RenderDef {
     pub shadow_map_size: u32,
     pub shadow_filter_radius: f32,
     pub shadow_normal_bias: f32,
+    pub view: View,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(crate) struct GiDef {
+    pub mode: GiMode,
+    pub voxel_resolution: u32,
+}
+
+impl Default for GiDef {
+    fn default() -> Self {
+        let d = GiSettings::default();
+        GiDef { mode: d.mode, voxel_resolution: d.voxel_resolution }
+    }
 }
 
 impl Default for RenderDef {
@@ -113,6 +130,7 @@ impl Default for RenderDef {
             shadow_map_size: d.shadow_map_size,
             shadow_filter_radius: d.shadow_filter_radius,
             shadow_normal_bias: d.shadow_normal_bias,
+            view: d.view,
         }
     }
 }
@@ -283,7 +301,8 @@ pub(crate) struct LightDef {
 
 // The keys of each table, for `--set` (keys that are optional may be absent from the
 // serialized tree but can still be set). A unit test checks these against the structs.
-pub(crate) const TOP_KEYS: &[&str] = &["scene", "camera", "render", "materials", "objects", "lights"];
+pub(crate) const TOP_KEYS: &[&str] = &["scene", "camera", "render", "gi", "materials", "objects", "lights"];
+pub(crate) const GI_KEYS: &[&str] = &["mode", "voxel_resolution"];
 pub(crate) const SCENE_KEYS: &[&str] = &["name", "search_paths", "bounds"];
 pub(crate) const BOUNDS_KEYS: &[&str] = &["min", "max"];
 pub(crate) const CAMERA_KEYS: &[&str] = &["position", "target", "up", "fov_y", "near", "far"];
@@ -296,6 +315,7 @@ pub(crate) const RENDER_KEYS: &[&str] = &[
     "shadow_map_size",
     "shadow_filter_radius",
     "shadow_normal_bias",
+    "view",
 ];
 pub(crate) const MATERIAL_KEYS: &[&str] = &["name", "albedo", "specular", "shininess", "emission", "albedo_texture"];
 pub(crate) const OBJECT_KEYS: &[&str] =
@@ -329,6 +349,7 @@ fn table_schema(norm: &str) -> Option<TableSchema> {
         "scene.bounds" => BOUNDS_KEYS,
         "camera" => CAMERA_KEYS,
         "render" => RENDER_KEYS,
+        "gi" => GI_KEYS,
         "materials.#" => MATERIAL_KEYS,
         "objects.#" => OBJECT_KEYS,
         "objects.#.motion" | "lights.#.motion" => MOTION_KEYS,
@@ -687,7 +708,13 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         shadow_map_size: r.shadow_map_size,
         shadow_filter_radius: ctx.scalar("render.shadow_filter_radius", r.shadow_filter_radius)?,
         shadow_normal_bias: ctx.scalar("render.shadow_normal_bias", r.shadow_normal_bias)?,
+        view: r.view,
+        gi: GiSettings { mode: file.gi.mode, voxel_resolution: file.gi.voxel_resolution },
     };
+    let res = settings.gi.voxel_resolution;
+    if !(8..=512).contains(&res) || !res.is_power_of_two() {
+        return Err(ctx.invalid("gi.voxel_resolution", format!("{res} is not a power of two in 8..=512")));
+    }
     if settings.shadow_filter_radius < 0.0 {
         return Err(ctx.invalid("render.shadow_filter_radius", "must be >= 0"));
     }

@@ -362,6 +362,7 @@ fn override_key_lists_match_the_schema() {
     assert_eq!(expected::<BoundsDef>(""), sorted(BOUNDS_KEYS));
     assert_eq!(expected::<CameraDef>(""), sorted(CAMERA_KEYS));
     assert_eq!(expected::<RenderDef>(""), sorted(RENDER_KEYS));
+    assert_eq!(expected::<GiDef>(""), sorted(GI_KEYS));
     assert_eq!(expected::<MaterialDef>(""), sorted(MATERIAL_KEYS));
     assert_eq!(expected::<ObjectDef>(""), sorted(OBJECT_KEYS));
     assert_eq!(expected::<MotionDef>(""), sorted(MOTION_KEYS));
@@ -929,4 +930,21 @@ fn keyframes_interpolate() {
     // Clamped at the ends.
     assert!(approx(o.model_matrix(5.0).transform_point3(Vec3::ZERO), Vec3::new(2.0, 0.0, 0.0), 1e-6));
     assert!(approx(o.model_matrix(-1.0).transform_point3(Vec3::ZERO), Vec3::ZERO, 1e-6));
+}
+
+#[test]
+fn gi_settings_parse_override_and_validate() {
+    let p = scenes_dir().join("cornell-box.toml");
+    let s = with_overrides(&p, &["gi.mode=\"vct\"", "gi.voxel_resolution=64", "render.view=\"voxel-albedo\""]).unwrap();
+    assert_eq!(s.settings.gi.mode, GiMode::Vct);
+    assert_eq!(s.settings.gi.voxel_resolution, 64);
+    assert_eq!(s.settings.view, View::VoxelAlbedo);
+    let d = load_default(&p).unwrap();
+    assert_eq!(d.settings.gi, GiSettings::default());
+    for bad in ["gi.voxel_resolution=100", "gi.voxel_resolution=4", "gi.voxel_resolution=1024"] {
+        let e = with_overrides(&p, &[bad]).unwrap_err().to_string();
+        assert!(e.contains("gi.voxel_resolution") && e.contains("power of two"), "{e}");
+    }
+    let e = with_overrides(&p, &["gi.mode=\"path\""]).unwrap_err().to_string();
+    assert!(e.contains("path"), "{e}");
 }

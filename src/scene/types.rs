@@ -282,6 +282,43 @@ pub enum ToneMap {
     Clamp,
 }
 
+/// Which global illumination a frame computes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum GiMode {
+    /// Direct light only: no voxel volumes, no voxel passes.
+    None,
+    /// Voxel cone tracing.
+    Vct,
+}
+
+/// What the frame shows (`--view`): the final image or a debug view.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum View {
+    Final,
+    /// The voxelized linear albedo (first non-empty voxel along each camera ray).
+    VoxelAlbedo,
+    /// The voxelized normal, shown as 0.5 + 0.5 n.
+    VoxelNormal,
+    /// The voxelized emitted radiance.
+    VoxelEmission,
+}
+
+/// Voxel global illumination settings (the `[gi]` table).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GiSettings {
+    pub mode: GiMode,
+    /// Voxels along each side of the cubic grid: a power of two in 8..=512.
+    pub voxel_resolution: u32,
+}
+
+impl Default for GiSettings {
+    fn default() -> Self {
+        GiSettings { mode: GiMode::None, voxel_resolution: 128 }
+    }
+}
+
 /// Per-scene render settings (the `[render]` table).
 #[derive(Debug, Clone, PartialEq)]
 pub struct RenderSettings {
@@ -298,6 +335,9 @@ pub struct RenderSettings {
     pub shadow_filter_radius: f32,
     /// Depth bias in shadow-map texels along the surface normal.
     pub shadow_normal_bias: f32,
+    /// What the frame shows.
+    pub view: View,
+    pub gi: GiSettings,
 }
 
 impl Default for RenderSettings {
@@ -311,6 +351,8 @@ impl Default for RenderSettings {
             shadow_map_size: 1024,
             shadow_filter_radius: 1.5,
             shadow_normal_bias: 1.5,
+            view: View::Final,
+            gi: GiSettings::default(),
         }
     }
 }

@@ -86,6 +86,7 @@ impl GBufferPass {
                 cull: vk::CullModeFlags::NONE,
                 depth_bias: false,
                 depth_clamp: false,
+                conservative: false,
                 spec: &[(0, views.len() as u32)],
             },
             &[set.layout],

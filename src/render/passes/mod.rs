@@ -5,6 +5,9 @@ pub mod lighting;
 pub mod readback;
 pub mod shadow;
 pub mod tonemap;
+pub mod voxel_clear;
+pub mod voxel_view;
+pub mod voxelize;
 
 use crate::gpu::Context;
 use ash::vk;

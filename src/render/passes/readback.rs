@@ -1,5 +1,6 @@
-//! Copies the HDR radiance and the 8-bit display image into host-visible buffers, then
-//! makes them visible to the host. Only in frames whose output is read back.
+//! Copies images into host-visible buffers and makes them visible to the host: the frame's
+//! HDR radiance and 8-bit display image (only in frames whose output is read back), and any
+//! other image on demand (volumes in tests and debugging).
 
 use crate::gpu::{Access, Buffer, Context, GpuResult, Image};
 use crate::render::graph::{Pass, Use};
@@ -7,93 +8,85 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
-pub struct ReadbackPass {
-    radiance: Arc<Image>,
-    display: Arc<Image>,
-    pub radiance_buffer: Arc<Buffer>,
-    pub display_buffer: Arc<Buffer>,
-}
-
-fn bytes_per_pixel(format: vk::Format) -> u64 {
+pub fn bytes_per_texel(format: vk::Format) -> u64 {
     match format {
         vk::Format::R32G32B32A32_SFLOAT => 16,
         vk::Format::R16G16B16A16_SFLOAT => 8,
+        vk::Format::R8_UINT | vk::Format::R8_UNORM => 1,
         _ => 4,
     }
 }
 
-impl ReadbackPass {
-    pub fn new(ctx: &Arc<Context>, radiance: &Arc<Image>, display: &Arc<Image>) -> GpuResult<Self> {
-        let size = |img: &Image| {
-            img.desc.extent.width as u64 * img.desc.extent.height as u64 * bytes_per_pixel(img.desc.format)
-        };
-        Ok(ReadbackPass {
-            radiance_buffer: Arc::new(Buffer::new(
+/// Copy of one image (mip 0, layer 0, all depth slices) into a new host-visible buffer.
+pub struct ImageDownload {
+    image: Arc<Image>,
+    pub buffer: Arc<Buffer>,
+    name: String,
+}
+
+impl ImageDownload {
+    pub fn new(ctx: &Arc<Context>, image: &Arc<Image>) -> GpuResult<Self> {
+        let e = image.desc.extent;
+        let size = e.width as u64 * e.height as u64 * e.depth as u64 * bytes_per_texel(image.desc.format);
+        Ok(ImageDownload {
+            buffer: Arc::new(Buffer::new(
                 ctx,
-                "radiance readback",
-                size(radiance),
+                &format!("{} readback", image.name),
+                size,
                 vk::BufferUsageFlags::TRANSFER_DST,
                 MemoryLocation::GpuToCpu,
             )?),
-            display_buffer: Arc::new(Buffer::new(
-                ctx,
-                "display readback",
-                size(display),
-                vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuToCpu,
-            )?),
-            radiance: radiance.clone(),
-            display: display.clone(),
+            image: image.clone(),
+            name: format!("readback {}", image.name),
         })
     }
+
+    /// The bytes of the last completed copy.
+    pub fn bytes(&self) -> &[u8] {
+        let n = self.image.desc.extent.width as usize
+            * self.image.desc.extent.height as usize
+            * self.image.desc.extent.depth as usize
+            * bytes_per_texel(self.image.desc.format) as usize;
+        &self.buffer.mapped().expect("host-visible readback")[..n]
+    }
 }
 
-fn copy(ctx: &Context, cmd: vk::CommandBuffer, img: &Image, buf: &Buffer) {
-    let region = vk::BufferImageCopy {
-        buffer_offset: 0,
-        buffer_row_length: 0,
-        buffer_image_height: 0,
-        image_subresource: vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        },
-        image_offset: vk::Offset3D::default(),
-        image_extent: img.desc.extent,
-    };
-    unsafe {
-        ctx.device.cmd_copy_image_to_buffer(cmd, img.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, buf.raw, &[region])
-    };
-}
-
-impl Pass for ReadbackPass {
+impl Pass for ImageDownload {
     fn name(&self) -> &str {
-        "readback"
+        &self.name
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        vec![
-            Use::read_image(&self.radiance, Access::TransferRead),
-            Use::read_image(&self.display, Access::TransferRead),
-            Use::buffer(&self.radiance_buffer, Access::TransferWrite),
-            Use::buffer(&self.display_buffer, Access::TransferWrite),
-        ]
+        vec![Use::read_image(&self.image, Access::TransferRead), Use::buffer(&self.buffer, Access::TransferWrite)]
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
-        copy(ctx, cmd, &self.radiance, &self.radiance_buffer);
-        copy(ctx, cmd, &self.display, &self.display_buffer);
+        let region = vk::BufferImageCopy {
+            buffer_offset: 0,
+            buffer_row_length: 0,
+            buffer_image_height: 0,
+            image_subresource: vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            },
+            image_offset: vk::Offset3D::default(),
+            image_extent: self.image.desc.extent,
+        };
+        unsafe {
+            ctx.device.cmd_copy_image_to_buffer(
+                cmd,
+                self.image.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                self.buffer.raw,
+                &[region],
+            )
+        };
     }
 }
 
 /// Records nothing: declares the host reads so the tracker makes the copies host-visible.
 pub struct HostReadPass {
-    pub buffers: [Arc<Buffer>; 2],
-}
-
-impl HostReadPass {
-    pub fn new(readback: &ReadbackPass) -> Self {
-        HostReadPass { buffers: [readback.radiance_buffer.clone(), readback.display_buffer.clone()] }
-    }
+    pub buffers: Vec<Arc<Buffer>>,
 }
 
 impl Pass for HostReadPass {
@@ -104,4 +97,20 @@ impl Pass for HostReadPass {
         self.buffers.iter().map(|b| Use::buffer(b, Access::HostRead)).collect()
     }
     fn record(&self, _ctx: &Context, _cmd: vk::CommandBuffer) {}
+}
+
+/// The frame's outputs: radiance and display image.
+pub struct ReadbackPasses {
+    pub radiance: ImageDownload,
+    pub display: ImageDownload,
+    pub host: HostReadPass,
+}
+
+impl ReadbackPasses {
+    pub fn new(ctx: &Arc<Context>, radiance: &Arc<Image>, display: &Arc<Image>) -> GpuResult<Self> {
+        let radiance = ImageDownload::new(ctx, radiance)?;
+        let display = ImageDownload::new(ctx, display)?;
+        let host = HostReadPass { buffers: vec![radiance.buffer.clone(), display.buffer.clone()] };
+        Ok(ReadbackPasses { radiance, display, host })
+    }
 }

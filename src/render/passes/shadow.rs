@@ -45,6 +45,7 @@ impl ShadowPass {
                 cull: vk::CullModeFlags::NONE,
                 depth_bias: true,
                 depth_clamp: true,
+                conservative: false,
                 spec: &[],
             },
             &[set.layout],

@@ -1,0 +1,75 @@
+// The voxel grid (mirrors render::voxel::GpuVoxelGrid) and helpers shared by every voxel pass.
+#ifndef DVSGI_VOXEL_GLSL
+#define DVSGI_VOXEL_GLSL
+
+struct VoxelGrid {
+    vec4 origin;     // xyz world position of the grid's min corner, w voxel size (world units)
+    uvec4 dims;      // x voxels per side
+    vec4 params;     // x emission scale: voxels store emission / scale in 8 bits
+};
+
+// Voxel volumes store RGB in 8 bits each plus an 8-bit sample count (R32_UINT, for atomics).
+uint pack_rgb_count(vec3 rgb255, float count) {
+    uvec4 b = uvec4(clamp(round(vec4(rgb255, count)), 0.0, 255.0));
+    return b.r | (b.g << 8) | (b.b << 16) | (b.a << 24);
+}
+
+vec4 unpack_rgb_count(uint v) {
+    return vec4(float(v & 0xffu), float((v >> 8) & 0xffu), float((v >> 16) & 0xffu), float(v >> 24));
+}
+
+// Running average of `value` (components in [0,1]) into voxel `c` of the r32ui image IMG
+// by compare-and-swap; the count saturates at 255 samples.
+#define DEFINE_ATOMIC_AVERAGE(NAME, IMG)                                                    \
+    void NAME(ivec3 c, vec3 value) {                                                        \
+        vec3 v255 = clamp(value, 0.0, 1.0) * 255.0;                                         \
+        uint desired = pack_rgb_count(v255, 1.0);                                           \
+        uint expected = 0u;                                                                 \
+        for (int i = 0; i < 256; ++i) {                                                     \
+            uint found = imageAtomicCompSwap(IMG, c, expected, desired);                    \
+            if (found == expected) break;                                                   \
+            expected = found;                                                               \
+            vec4 cur = unpack_rgb_count(found);                                             \
+            if (cur.a >= 255.0) break;                                                      \
+            desired = pack_rgb_count((cur.rgb * cur.a + v255) / (cur.a + 1.0), cur.a + 1.0); \
+        }                                                                                   \
+    }
+
+// Separating-axis test of a triangle (grid coordinates) against the axis-aligned box
+// centre c, half size h. Touching counts as overlapping (conservative).
+bool sat_axis_separates(vec3 axis, vec3 a, vec3 b, vec3 d, vec3 h) {
+    float len2 = dot(axis, axis);
+    if (len2 < 1e-20) return false;
+    float p0 = dot(axis, a), p1 = dot(axis, b), p2 = dot(axis, d);
+    float r = dot(h, abs(axis));
+    float eps = 1e-5 * (r + 1e-3 * sqrt(len2));
+    return min(p0, min(p1, p2)) > r + eps || max(p0, max(p1, p2)) < -r - eps;
+}
+
+bool triangle_box_overlap(vec3 c, vec3 h, vec3 t0, vec3 t1, vec3 t2) {
+    vec3 a = t0 - c, b = t1 - c, d = t2 - c;
+    vec3 e[3] = vec3[3](b - a, d - b, a - d);
+    vec3 axes[3] = vec3[3](vec3(1, 0, 0), vec3(0, 1, 0), vec3(0, 0, 1));
+    for (int i = 0; i < 3; ++i) {
+        if (sat_axis_separates(axes[i], a, b, d, h)) return false;
+    }
+    if (sat_axis_separates(cross(e[0], e[1]), a, b, d, h)) return false;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            if (sat_axis_separates(cross(e[i], axes[j]), a, b, d, h)) return false;
+        }
+    }
+    return true;
+}
+
+// Dominant-axis projection: axis 0 (x) -> (y, z, x), 1 (y) -> (z, x, y), 2 (z) -> (x, y, z):
+// (u, v) in the image plane, w along the projection axis.
+vec3 to_uvw(vec3 p, uint axis) {
+    return axis == 0u ? p.yzx : (axis == 1u ? p.zxy : p);
+}
+
+vec3 from_uvw(vec3 q, uint axis) {
+    return axis == 0u ? q.zxy : (axis == 1u ? q.yzx : q);
+}
+
+#endif

@@ -1,0 +1,58 @@
+#version 460
+// Debug view: march each camera ray through the voxel grid (3D DDA) and show the first
+// non-empty voxel's albedo, normal (0.5 + 0.5 n) or emitted radiance.
+#include "common.glsl"
+#include "voxel.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(constant_id = 0) const uint MODE = 0;  // 0 albedo, 1 normal, 2 emission, 3 none (black)
+
+layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
+layout(set = 0, binding = 1) uniform GridBlock { VoxelGrid grid; };
+layout(set = 0, binding = 2, r32ui) uniform readonly uimage3D volume;
+layout(set = 0, binding = 3, rgba32f) uniform writeonly image2D out_radiance;
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(uvec2(px), frame.counts.xy))) return;
+    vec2 ndc = (vec2(px) + 0.5) / vec2(frame.counts.xy) * 2.0 - 1.0;
+    vec4 far_h = frame.inv_view_proj * vec4(ndc, 1.0, 1.0);
+    vec3 o = (frame.camera_pos.xyz - grid.origin.xyz) / grid.origin.w;
+    vec3 d = safe_normalize((far_h.xyz / far_h.w - frame.camera_pos.xyz) / grid.origin.w, vec3(0.0, 0.0, 1.0));
+    float res = float(grid.dims.x);
+    // Clip the ray to the grid box [0, res]^3.
+    vec3 inv = 1.0 / d;  // +-inf for zero components is handled by min/max below
+    vec3 t0 = (vec3(0.0) - o) * inv, t1 = (vec3(res) - o) * inv;
+    vec3 tn = min(t0, t1), tf = max(t0, t1);
+    float tenter = max(max(tn.x, tn.y), max(tn.z, 0.0));
+    float texit = min(tf.x, min(tf.y, tf.z));
+    vec4 result = vec4(0.0, 0.0, 0.0, 1.0);
+    if (tenter < texit) {
+        vec3 p = o + d * (tenter + 1e-4);
+        ivec3 c = clamp(ivec3(floor(p)), ivec3(0), ivec3(int(res) - 1));
+        ivec3 stp = ivec3(sign(d));
+        vec3 next = (vec3(c) + max(vec3(stp), vec3(0.0)) - o) * inv;
+        vec3 delta = abs(inv);
+        for (int i = 0; i < 3 * 512; ++i) {
+            uint v = imageLoad(volume, c).r;
+            if ((v >> 24) != 0u) {
+                vec3 rgb = unpack_rgb_count(v).rgb / 255.0;
+                result.rgb = MODE == 2u ? rgb * grid.params.x : (MODE == 3u ? vec3(0.0) : rgb);
+                break;
+            }
+            if (next.x < next.y && next.x < next.z) {
+                c.x += stp.x;
+                next.x += delta.x;
+            } else if (next.y < next.z) {
+                c.y += stp.y;
+                next.y += delta.y;
+            } else {
+                c.z += stp.z;
+                next.z += delta.z;
+            }
+            if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(int(res))))) break;
+        }
+    }
+    imageStore(out_radiance, px, result);
+}

@@ -1,0 +1,80 @@
+#version 460
+// Voxelization: each fragment is one voxel column along the dominant axis. Every voxel of the
+// column within the triangle's depth range over the pixel square is tested exactly against
+// the triangle (separating axes) and, if touched, receives a running average of linear
+// albedo, normal and emission (atomic compare-and-swap on R32_UINT).
+#include "common.glsl"
+#include "scene.glsl"
+#include "voxel.glsl"
+
+layout(constant_id = 0) const uint TEXTURE_COUNT = 1;
+layout(constant_id = 2) const bool HAS_EMISSION = false;
+layout(constant_id = 3) const bool HAS_FLAGS = false;
+
+layout(set = 0, binding = 2, std430) readonly buffer Materials { Material materials[]; };
+layout(set = 0, binding = 3) uniform sampler2D textures[TEXTURE_COUNT];
+layout(set = 0, binding = 4) uniform GridBlock { VoxelGrid grid; };
+layout(set = 0, binding = 5, r32ui) uniform coherent uimage3D vox_albedo;
+layout(set = 0, binding = 6, r32ui) uniform coherent uimage3D vox_normal;
+layout(set = 0, binding = 7, r32ui) uniform coherent uimage3D vox_emission;
+layout(set = 0, binding = 8, r8ui) uniform writeonly uimage3D vox_flags;
+
+layout(push_constant) uniform Push { uint mark_static; } pc;
+
+layout(location = 0) in vec3 g_normal;
+layout(location = 1) in vec2 g_uv;
+layout(location = 2) flat in uint g_material;
+layout(location = 3) flat in uint g_axis;
+layout(location = 4) flat in vec3 g_t0;
+layout(location = 5) flat in vec3 g_t1;
+layout(location = 6) flat in vec3 g_t2;
+
+DEFINE_ATOMIC_AVERAGE(average_albedo, vox_albedo)
+DEFINE_ATOMIC_AVERAGE(average_normal, vox_normal)
+DEFINE_ATOMIC_AVERAGE(average_emission, vox_emission)
+
+void main() {
+    int res = int(grid.dims.x);
+    ivec2 px = ivec2(floor(gl_FragCoord.xy));
+    vec3 a = to_uvw(g_t0, g_axis), b = to_uvw(g_t1, g_axis), c = to_uvw(g_t2, g_axis);
+    vec3 n = cross(b - a, c - a);
+    if (abs(n.z) < 1e-20) return;
+    // Depth w of the triangle's plane over the pixel square's corners, clamped to the triangle.
+    float wmin = 1e30, wmax = -1e30;
+    for (int i = 0; i < 4; ++i) {
+        vec2 uv = vec2(px) + vec2(i & 1, i >> 1);
+        float w = a.z - (n.x * (uv.x - a.x) + n.y * (uv.y - a.y)) / n.z;
+        wmin = min(wmin, w);
+        wmax = max(wmax, w);
+    }
+    wmin = max(wmin, min(a.z, min(b.z, c.z)));
+    wmax = min(wmax, max(a.z, max(b.z, c.z)));
+    int k0 = max(int(floor(wmin)), 0);
+    int k1 = min(int(floor(wmax)), res - 1);
+    if (px.x < 0 || px.y < 0 || px.x >= res || px.y >= res) return;
+
+    Material m = materials[g_material];
+    vec3 albedo = m.albedo.rgb;
+    int tex = m.texture.x;
+    if (tex >= 0 && uint(tex) < TEXTURE_COUNT) {
+        albedo *= texture(textures[tex], g_uv).rgb;
+    }
+    vec3 face = safe_normalize(cross(g_t1 - g_t0, g_t2 - g_t0), vec3(0.0, 1.0, 0.0));
+    vec3 nrm = safe_normalize(g_normal, face);
+    vec3 emission = m.emission.rgb / grid.params.x;
+
+    // A plane with slope <= 1 along u and v spans at most 3 voxels of the column.
+    for (int k = k0; k <= min(k1, k0 + 3); ++k) {
+        vec3 voxel = from_uvw(vec3(px, k), g_axis);
+        if (!triangle_box_overlap(voxel + 0.5, vec3(0.5), g_t0, g_t1, g_t2)) continue;
+        ivec3 vc = ivec3(voxel);
+        average_albedo(vc, albedo);
+        average_normal(vc, nrm * 0.5 + 0.5);
+        if (HAS_EMISSION) {
+            average_emission(vc, emission);  // zeros too: a half-emissive voxel emits half
+        }
+        if (HAS_FLAGS && pc.mark_static != 0u) {
+            imageStore(vox_flags, vc, uvec4(1u));
+        }
+    }
+}

@@ -1,0 +1,96 @@
+//! Voxel clears: every volume once before static voxelization (transfer), and before each
+//! dynamic update only the voxels not marked static (compute).
+
+use crate::gpu::pipeline::group_count;
+use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Pipeline};
+use crate::render::graph::{Pass, Use};
+use crate::render::voxel::VoxelVolumes;
+use ash::vk;
+use std::sync::Arc;
+
+pub struct VoxelClearPass {
+    volumes: Arc<VoxelVolumes>,
+}
+
+impl VoxelClearPass {
+    pub fn new(volumes: &Arc<VoxelVolumes>) -> Self {
+        VoxelClearPass { volumes: volumes.clone() }
+    }
+}
+
+impl Pass for VoxelClearPass {
+    fn name(&self) -> &str {
+        "voxel clear"
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        self.volumes.all().into_iter().map(|v| Use::write_image(v, Access::TransferWrite)).collect()
+    }
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        for v in self.volumes.all() {
+            unsafe {
+                ctx.device.cmd_clear_color_image(
+                    cmd,
+                    v.raw,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &vk::ClearColorValue { uint32: [0; 4] },
+                    &[v.desc.full_range()],
+                )
+            };
+        }
+    }
+}
+
+pub struct DynamicClearPass {
+    volumes: Arc<VoxelVolumes>,
+    pipeline: Pipeline,
+    set: DescriptorSet,
+}
+
+impl DynamicClearPass {
+    pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>) -> GpuResult<Self> {
+        let set = DescriptorSet::new(
+            ctx,
+            "voxel clear dynamic",
+            vk::ShaderStageFlags::COMPUTE,
+            &[
+                Bind::Uniform(&volumes.grid_buffer),
+                Bind::StorageImage(volumes.albedo.view),
+                Bind::StorageImage(volumes.normal.view),
+                Bind::StorageImage(volumes.emission_or_albedo().view),
+                Bind::StorageImage(volumes.flags_or_placeholder().view),
+            ],
+        )?;
+        let pipeline = Pipeline::compute(
+            ctx,
+            "voxel clear dynamic",
+            shaders::VOXEL_CLEAR_DYNAMIC_COMP,
+            &[set.layout],
+            0,
+            &[(2, u32::from(volumes.needs.emission))],
+        )?;
+        Ok(DynamicClearPass { volumes: volumes.clone(), pipeline, set })
+    }
+}
+
+impl Pass for DynamicClearPass {
+    fn name(&self) -> &str {
+        "voxel clear dynamic"
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        let v = &self.volumes;
+        let mut uses = vec![
+            Use::read_image(&v.albedo, Access::ComputeShaderWrite),
+            Use::read_image(&v.normal, Access::ComputeShaderWrite),
+            Use::read_image(v.flags_or_placeholder(), Access::ComputeShaderReadStorage),
+        ];
+        if let Some(e) = &v.emission {
+            uses.push(Use::read_image(e, Access::ComputeShaderWrite));
+        }
+        uses
+    }
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        let g = group_count(self.volumes.grid.resolution, 4);
+        self.pipeline.bind(cmd, &[self.set.set]);
+        unsafe { ctx.device.cmd_dispatch(cmd, g, g, g) };
+    }
+}

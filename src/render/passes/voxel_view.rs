@@ -1,0 +1,66 @@
+//! Debug view (`--view voxel-albedo|voxel-normal|voxel-emission`): ray-marches the voxel
+//! volume from the camera into the radiance image, in place of the lighting pass.
+
+use crate::gpu::pipeline::group_count;
+use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline};
+use crate::render::graph::{Pass, Use};
+use crate::render::voxel::VoxelVolumes;
+use crate::render::FrameBuffers;
+use crate::scene::View;
+use ash::vk;
+use std::sync::Arc;
+
+pub struct VoxelViewPass {
+    volume: Arc<Image>,
+    pub radiance: Arc<Image>,
+    pipeline: Pipeline,
+    set: DescriptorSet,
+}
+
+impl VoxelViewPass {
+    pub fn new(
+        ctx: &Arc<Context>,
+        frame: &FrameBuffers,
+        volumes: &Arc<VoxelVolumes>,
+        view: View,
+        radiance: &Arc<Image>,
+    ) -> GpuResult<Self> {
+        let (volume, mode) = match view {
+            View::VoxelNormal => (&volumes.normal, 1),
+            View::VoxelEmission => (volumes.emission_or_albedo(), 2),
+            _ => (&volumes.albedo, 0),
+        };
+        // Without emissive materials there is no emission volume: show black, not albedo.
+        let mode = if view == View::VoxelEmission && volumes.emission.is_none() { 3 } else { mode };
+        let set = DescriptorSet::new(
+            ctx,
+            "voxel view",
+            vk::ShaderStageFlags::COMPUTE,
+            &[
+                Bind::Uniform(&frame.uniforms),
+                Bind::Uniform(&volumes.grid_buffer),
+                Bind::StorageImage(volume.view),
+                Bind::StorageImage(radiance.view),
+            ],
+        )?;
+        let pipeline = Pipeline::compute(ctx, "voxel view", shaders::VOXEL_VIEW_COMP, &[set.layout], 0, &[(0, mode)])?;
+        Ok(VoxelViewPass { volume: volume.clone(), radiance: radiance.clone(), pipeline, set })
+    }
+}
+
+impl Pass for VoxelViewPass {
+    fn name(&self) -> &str {
+        "voxel view"
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        vec![
+            Use::read_image(&self.volume, Access::ComputeShaderReadStorage),
+            Use::write_image(&self.radiance, Access::ComputeShaderWrite),
+        ]
+    }
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        let e = self.radiance.extent2d();
+        self.pipeline.bind(cmd, &[self.set.set]);
+        unsafe { ctx.device.cmd_dispatch(cmd, group_count(e.width, 8), group_count(e.height, 8), 1) };
+    }
+}

@@ -1,0 +1,152 @@
+//! The voxel grid and its volumes. The grid is a cube: the scene file's `[scene] bounds` when
+//! given, otherwise the world bounds at the scene time grown by 5% (so surfaces on the scene's
+//! boundary are not on the grid's faces). Volumes are created only when the scene needs them.
+
+use crate::gpu::{Buffer, Context, GpuError, GpuResult, Image, ImageDesc};
+use crate::scene::{Aabb, Scene};
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// Mirrors `VoxelGrid` in glsl/include/voxel.glsl.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug)]
+pub struct GpuVoxelGrid {
+    pub origin: [f32; 4],
+    pub dims: [u32; 4],
+    pub params: [f32; 4],
+}
+
+/// Placement of the cubic grid in world space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VoxelGrid {
+    /// World position of the grid's min corner.
+    pub origin: Vec3,
+    /// Edge length of one voxel (world units).
+    pub voxel_size: f32,
+    pub resolution: u32,
+}
+
+impl VoxelGrid {
+    /// The cube around `bounds` (padded by `pad` of its size on every side).
+    pub fn around(bounds: Aabb, resolution: u32, pad: f32) -> VoxelGrid {
+        let (center, extent) =
+            if bounds.is_empty() { (Vec3::ZERO, 1.0) } else { (bounds.center(), bounds.extent().max_element()) };
+        // A flat or empty scene still gets a grid of non-zero size.
+        let extent = if extent > 0.0 && extent.is_finite() { extent } else { 1.0 } * (1.0 + 2.0 * pad);
+        VoxelGrid { origin: center - Vec3::splat(extent * 0.5), voxel_size: extent / resolution as f32, resolution }
+    }
+
+    pub fn for_scene(scene: &Scene) -> VoxelGrid {
+        let res = scene.settings.gi.voxel_resolution;
+        match scene.bounds {
+            Some(b) => VoxelGrid::around(b, res, 0.0),
+            None => VoxelGrid::around(scene.world_bounds(scene.settings.time), res, 0.05),
+        }
+    }
+
+    /// World position of voxel (i, j, k)'s centre.
+    pub fn center_of(&self, i: u32, j: u32, k: u32) -> Vec3 {
+        self.origin + (Vec3::new(i as f32, j as f32, k as f32) + 0.5) * self.voxel_size
+    }
+}
+
+/// What the scene needs voxelized.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct VoxelNeeds {
+    /// Some material emits: an emission volume.
+    pub emission: bool,
+    /// Some object is dynamic: a static-flag volume, a dynamic clear and a dynamic pass.
+    pub dynamic: bool,
+}
+
+impl VoxelNeeds {
+    pub fn of(scene: &Scene) -> VoxelNeeds {
+        VoxelNeeds {
+            emission: scene.materials.iter().any(|m| m.is_emissive()),
+            dynamic: scene.objects.iter().any(|o| o.dynamic),
+        }
+    }
+}
+
+/// The voxel volumes (R32_UINT: RGB8 + 8-bit count, see voxel.glsl) and the grid uniform.
+pub struct VoxelVolumes {
+    pub grid: VoxelGrid,
+    pub needs: VoxelNeeds,
+    pub grid_buffer: Buffer,
+    pub albedo: Arc<Image>,
+    pub normal: Arc<Image>,
+    /// Only with emissive materials.
+    pub emission: Option<Arc<Image>>,
+    /// Only with dynamic objects: 1 where static geometry was voxelized (R8_UINT).
+    pub flags: Option<Arc<Image>>,
+    /// Bound in place of `flags` when there is none (a 1-voxel volume).
+    pub flags_placeholder: Option<Arc<Image>>,
+    /// Emitted radiance that maps to 255 in the emission volume.
+    pub emission_scale: f32,
+}
+
+impl VoxelVolumes {
+    pub fn new(ctx: &Arc<Context>, scene: &Scene) -> GpuResult<VoxelVolumes> {
+        if !ctx.info.optional.geometry_shader || !ctx.info.optional.fragment_stores_and_atomics {
+            return Err(GpuError::Limit(format!(
+                "voxel GI needs geometryShader and fragmentStoresAndAtomics, which {} lacks; use --set gi.mode=\"none\"",
+                ctx.info.name
+            )));
+        }
+        let grid = VoxelGrid::for_scene(scene);
+        let needs = VoxelNeeds::of(scene);
+        let res = grid.resolution;
+        let usage =
+            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC;
+        let volume = |name: &str, format| Image::new(ctx, name, ImageDesc::d3(format, res, 1, usage)).map(Arc::new);
+        let emission_scale = scene.materials.iter().map(|m| m.emission.max_element()).fold(0.0f32, f32::max).max(1e-6);
+        let grid_buffer = Buffer::new(
+            ctx,
+            "voxel grid",
+            std::mem::size_of::<GpuVoxelGrid>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+        grid_buffer.write_pod(&[GpuVoxelGrid {
+            origin: [grid.origin.x, grid.origin.y, grid.origin.z, grid.voxel_size],
+            dims: [res, 0, 0, 0],
+            params: [emission_scale, 0.0, 0.0, 0.0],
+        }]);
+        Ok(VoxelVolumes {
+            grid,
+            needs,
+            grid_buffer,
+            albedo: volume("voxel albedo", vk::Format::R32_UINT)?,
+            normal: volume("voxel normal", vk::Format::R32_UINT)?,
+            emission: needs.emission.then(|| volume("voxel emission", vk::Format::R32_UINT)).transpose()?,
+            flags: needs.dynamic.then(|| volume("voxel static flags", vk::Format::R8_UINT)).transpose()?,
+            flags_placeholder: (!needs.dynamic)
+                .then(|| {
+                    Image::new(ctx, "voxel flags placeholder", ImageDesc::d3(vk::Format::R8_UINT, 1, 1, usage))
+                        .map(Arc::new)
+                })
+                .transpose()?,
+            emission_scale,
+        })
+    }
+
+    /// Every volume that exists, for clears and memory reports.
+    pub fn all(&self) -> Vec<&Arc<Image>> {
+        let mut v = vec![&self.albedo, &self.normal];
+        v.extend(self.emission.as_ref());
+        v.extend(self.flags.as_ref());
+        v
+    }
+
+    /// The volume bound where the emission volume goes (albedo stands in, never written).
+    pub fn emission_or_albedo(&self) -> &Arc<Image> {
+        self.emission.as_ref().unwrap_or(&self.albedo)
+    }
+
+    pub fn flags_or_placeholder(&self) -> &Arc<Image> {
+        self.flags.as_ref().or(self.flags_placeholder.as_ref()).expect("flags or placeholder")
+    }
+}

@@ -1,0 +1,308 @@
+//! Voxelization on the real device (lavapipe in CI, validation on) against CPU references.
+
+mod common;
+
+use common::*;
+use dvsgi::render::Renderer;
+use dvsgi::scene::*;
+use glam::{Mat4, Vec2, Vec3};
+use std::collections::BTreeSet;
+use std::path::PathBuf;
+
+const RES: u32 = 32;
+
+fn mesh(name: &str, tris: &[[Vec3; 3]], material: u32) -> Mesh {
+    let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
+    let normals = tris
+        .iter()
+        .flat_map(|t| {
+            let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or(Vec3::Y);
+            [n; 3]
+        })
+        .collect();
+    let mut bounds = Aabb::EMPTY;
+    positions.iter().for_each(|p| bounds.grow(*p));
+    Mesh {
+        name: name.into(),
+        uvs: vec![Vec2::ZERO; positions.len()],
+        indices: (0..positions.len() as u32).collect(),
+        positions,
+        normals,
+        material,
+        bounds,
+    }
+}
+
+/// A scene whose voxel grid is exactly [0, RES]^3 in world units (voxel (i,j,k) = [i,i+1]x...).
+fn scene(objects: Vec<(Mesh, bool, Motion)>) -> Scene {
+    let mut s = Scene {
+        path: PathBuf::from("voxel-test"),
+        name: "voxel test".into(),
+        meshes: vec![],
+        objects: vec![],
+        materials: vec![
+            Material {
+                name: "a".into(),
+                albedo: Vec3::new(0.8, 0.4, 0.2),
+                albedo_texture: None,
+                specular: Vec3::ZERO,
+                shininess: 1.0,
+                emission: Vec3::ZERO,
+            },
+            Material {
+                name: "b".into(),
+                albedo: Vec3::new(0.2, 0.6, 1.0),
+                albedo_texture: None,
+                specular: Vec3::ZERO,
+                shininess: 1.0,
+                emission: Vec3::ZERO,
+            },
+        ],
+        textures: vec![],
+        camera: Camera {
+            position: Vec3::new(16.0, 16.0, -40.0),
+            target: Vec3::splat(16.0),
+            up: Vec3::Y,
+            fov_y_deg: 45.0,
+            near: 0.1,
+            far: 200.0,
+        },
+        lights: vec![],
+        settings: RenderSettings {
+            width: 16,
+            height: 16,
+            gi: GiSettings { mode: GiMode::Vct, voxel_resolution: RES },
+            ..Default::default()
+        },
+        bounds: Some(Aabb { min: Vec3::ZERO, max: Vec3::splat(RES as f32) }),
+    };
+    for (i, (m, dynamic, motion)) in objects.into_iter().enumerate() {
+        s.meshes.push(m);
+        s.objects.push(Object {
+            name: format!("o{i}"),
+            meshes: vec![i as u32],
+            transform: Mat4::IDENTITY,
+            dynamic,
+            motion,
+        });
+    }
+    s
+}
+
+/// Separating-axis overlap of a triangle and the box [c - h, c + h], by projecting onto all
+/// 13 candidate axes.
+fn overlaps(t: &[Vec3; 3], c: Vec3, h: f32) -> bool {
+    let e = [t[1] - t[0], t[2] - t[1], t[0] - t[2]];
+    let mut axes = vec![Vec3::X, Vec3::Y, Vec3::Z, e[0].cross(e[1])];
+    for ei in e {
+        for a in [Vec3::X, Vec3::Y, Vec3::Z] {
+            axes.push(ei.cross(a));
+        }
+    }
+    axes.into_iter().filter(|a| a.length_squared() > 1e-12).all(|a| {
+        let p: Vec<f32> = t.iter().map(|v| a.dot(*v - c)).collect();
+        let r = h * (a.x.abs() + a.y.abs() + a.z.abs());
+        let (lo, hi) =
+            (p.iter().cloned().fold(f32::INFINITY, f32::min), p.iter().cloned().fold(f32::NEG_INFINITY, f32::max));
+        !(lo > r || hi < -r)
+    })
+}
+
+type Voxel = (u32, u32, u32);
+
+/// Voxels the triangle overlaps with every box shrunk (`grow` < 0) or grown by |grow|.
+fn reference(t: &[Vec3; 3], grow: f32) -> BTreeSet<Voxel> {
+    let mut out = BTreeSet::new();
+    for k in 0..RES {
+        for j in 0..RES {
+            for i in 0..RES {
+                let c = Vec3::new(i as f32, j as f32, k as f32) + 0.5;
+                if overlaps(t, c, 0.5 + grow) {
+                    out.insert((i, j, k));
+                }
+            }
+        }
+    }
+    out
+}
+
+fn occupied(volume: &[u8], res: u32) -> BTreeSet<Voxel> {
+    let words: Vec<u32> = bytemuck::pod_collect_to_vec(volume);
+    let mut out = BTreeSet::new();
+    for (n, w) in words.iter().enumerate() {
+        if w >> 24 != 0 {
+            let n = n as u32;
+            out.insert((n % res, (n / res) % res, n / (res * res)));
+        }
+    }
+    out
+}
+
+fn albedo_volume(r: &mut Renderer) -> Vec<u8> {
+    let v = r.voxels().expect("voxel volumes").albedo.clone();
+    r.download(&v).unwrap()
+}
+
+/// Deterministic pseudo-random numbers in [0, 1).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f32 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn point(&mut self, lo: f32, hi: f32) -> Vec3 {
+        Vec3::new(self.next(), self.next(), self.next()) * (hi - lo) + lo
+    }
+}
+
+/// Thin, oblique, axis-aligned, tiny, boundary and random triangles: every voxel the triangle
+/// touches (CPU separating-axis test, boxes shrunk by 1e-3) is set, and nothing farther than
+/// 1e-3 from the triangle.
+#[test]
+fn voxelization_is_conservative_and_tight() {
+    let v = Vec3::new;
+    let mut tris: Vec<(&str, [Vec3; 3])> = vec![
+        ("oblique", [v(3.2, 4.1, 5.3), v(20.7, 8.2, 25.1), v(10.3, 27.9, 12.6)]),
+        ("thin oblique sliver", [v(2.3, 20.1, 3.7), v(28.6, 22.4, 27.2), v(2.33, 20.06, 3.72)]),
+        ("axis-aligned (y = 5.3)", [v(4.2, 5.3, 4.7), v(14.8, 5.3, 6.1), v(9.1, 5.3, 15.6)]),
+        ("axis-aligned sliver (z = 27.4)", [v(1.5, 10.2, 27.4), v(30.1, 10.25, 27.4), v(30.1, 10.21, 27.4)]),
+        ("edge-on sliver along x", [v(1.2, 3.5, 3.5), v(30.7, 3.5, 3.5), v(30.7, 3.51, 3.52)]),
+        ("tiny inside one voxel", [v(7.2, 7.3, 7.4), v(7.4, 7.3, 7.2), v(7.3, 7.6, 7.3)]),
+        ("on a voxel boundary (x = 16)", [v(16.0, 2.5, 2.5), v(16.0, 12.5, 4.5), v(16.0, 6.5, 14.5)]),
+        ("diagonal 45 degrees", [v(2.0, 2.0, 2.0), v(20.0, 20.0, 2.5), v(2.5, 2.0, 20.0)]),
+    ];
+    let mut rng = Lcg(7);
+    let names: Vec<String> = (0..10).map(|i| format!("random {i}")).collect();
+    for (i, name) in names.iter().enumerate() {
+        let a = rng.point(0.5, 31.5);
+        let span = if i % 2 == 0 { 12.0 } else { 3.0 };
+        let b = (a + rng.point(-span, span)).clamp(Vec3::splat(0.5), Vec3::splat(31.5));
+        let c = (a + rng.point(-span, span)).clamp(Vec3::splat(0.5), Vec3::splat(31.5));
+        tris.push((name, [a, b, c]));
+    }
+    let ctx = context();
+    for (name, t) in &tris {
+        let mut r = Renderer::new(&ctx, scene(vec![(mesh(name, &[*t], 0), false, Motion::None)])).unwrap();
+        r.render(0.0, false).unwrap();
+        let got = occupied(&albedo_volume(&mut r), RES);
+        let required = reference(t, -1e-3);
+        let allowed = reference(t, 1e-3);
+        let missing: Vec<_> = required.difference(&got).collect();
+        let extra: Vec<_> = got.difference(&allowed).collect();
+        assert!(
+            missing.is_empty(),
+            "{name}: {} of {} voxels missing, e.g. {:?}",
+            missing.len(),
+            required.len(),
+            &missing[..missing.len().min(5)]
+        );
+        assert!(
+            extra.is_empty(),
+            "{name}: {} voxels set that the triangle does not touch, e.g. {:?}",
+            extra.len(),
+            &extra[..extra.len().min(5)]
+        );
+        assert!(!got.is_empty(), "{name}: nothing voxelized");
+    }
+    assert_no_validation_messages(&ctx);
+}
+
+/// The running average of two materials' albedos meeting in the same voxels is their mean,
+/// and voxel normals point the surface's way.
+#[test]
+fn voxel_albedo_and_normal_are_averaged() {
+    let v = Vec3::new;
+    // Two coincident quads (as triangles) at y = 10.5 with different materials.
+    let quad = [
+        [v(4.0, 10.5, 4.0), v(12.0, 10.5, 4.0), v(12.0, 10.5, 12.0)],
+        [v(4.0, 10.5, 4.0), v(12.0, 10.5, 12.0), v(4.0, 10.5, 12.0)],
+    ];
+    let ctx = context();
+    let s = scene(vec![(mesh("a", &quad, 0), false, Motion::None), (mesh("b", &quad, 1), false, Motion::None)]);
+    let mut r = Renderer::new(&ctx, s).unwrap();
+    r.render(0.0, false).unwrap();
+    let albedo: Vec<u32> = bytemuck::pod_collect_to_vec(&albedo_volume(&mut r));
+    let normal_img = r.voxels().unwrap().normal.clone();
+    let normal: Vec<u32> = bytemuck::pod_collect_to_vec(&r.download(&normal_img).unwrap());
+    let idx = |i: u32, j: u32, k: u32| (i + RES * (j + RES * k)) as usize;
+    let w = albedo[idx(8, 10, 8)];
+    let rgb = [(w & 255) as f32 / 255.0, ((w >> 8) & 255) as f32 / 255.0, ((w >> 16) & 255) as f32 / 255.0];
+    let expected = [0.5, 0.5, 0.6]; // mean of (0.8, 0.4, 0.2) and (0.2, 0.6, 1.0)
+    for c in 0..3 {
+        assert!((rgb[c] - expected[c]).abs() < 3.0 / 255.0, "albedo {rgb:?} vs {expected:?}");
+    }
+    assert!(w >> 24 >= 2, "two samples averaged, count {}", w >> 24);
+    let n = normal[idx(8, 10, 8)];
+    let ny = ((n >> 8) & 255) as f32 / 255.0 * 2.0 - 1.0;
+    assert!(ny.abs() > 0.98, "normal y {ny}");
+    assert_eq!(albedo[idx(8, 12, 8)], 0, "voxel above the quad is empty");
+    assert_no_validation_messages(&ctx);
+}
+
+/// A dynamic object moves: its old voxels are gone, its new ones present, and every static
+/// voxel (flag set) keeps its exact value.
+#[test]
+fn dynamic_update_clears_old_voxels_and_keeps_static_ones() {
+    let v = Vec3::new;
+    let floor = [
+        [v(1.0, 2.5, 1.0), v(31.0, 2.5, 1.0), v(31.0, 2.5, 31.0)],
+        [v(1.0, 2.5, 1.0), v(31.0, 2.5, 31.0), v(1.0, 2.5, 31.0)],
+    ];
+    let wall = [[v(1.0, 1.0, 25.5), v(31.0, 1.0, 25.5), v(31.0, 20.0, 25.5)]];
+    let blob = [
+        [v(5.2, 8.3, 5.1), v(9.7, 8.6, 5.4), v(7.1, 13.2, 9.6)],
+        [v(5.2, 8.3, 5.1), v(7.1, 13.2, 9.6), v(4.9, 12.1, 8.8)],
+    ];
+    let motion = Motion::Keyframes(vec![
+        Keyframe { time: 0.0, translate: Vec3::ZERO, rotate_deg: Vec3::ZERO, scale: Vec3::ONE },
+        Keyframe { time: 1.0, translate: v(14.0, 0.0, 6.0), rotate_deg: Vec3::ZERO, scale: Vec3::ONE },
+    ]);
+    let ctx = context();
+    let s = scene(vec![
+        (mesh("floor", &floor, 0), false, Motion::None),
+        (mesh("wall", &wall, 0), false, Motion::None),
+        (mesh("blob", &blob, 1), true, motion.clone()),
+    ]);
+    let mut r = Renderer::new(&ctx, s).unwrap();
+    assert!(r.pass_names(false).contains(&"voxel clear dynamic".to_string()));
+    let flags_img = r.voxels().unwrap().flags.clone().expect("a flag volume for a dynamic scene");
+    r.render(0.0, false).unwrap();
+    let a0 = albedo_volume(&mut r);
+    let flags: Vec<u8> = r.download(&flags_img).unwrap();
+    r.render(1.0, false).unwrap();
+    let a1 = albedo_volume(&mut r);
+    assert!(!r.pass_names(false).contains(&"voxelize static".to_string()), "static geometry is voxelized once");
+
+    let blob_at = |t: f32| -> BTreeSet<Voxel> {
+        let m = motion.matrix(t);
+        blob.iter().flat_map(|tri| reference(&tri.map(|p| m.transform_point3(p)), -1e-3)).collect()
+    };
+    let static_set: BTreeSet<Voxel> = floor.iter().chain(wall.iter()).flat_map(|t| reference(t, -1e-3)).collect();
+    let static_allowed: BTreeSet<Voxel> = floor.iter().chain(wall.iter()).flat_map(|t| reference(t, 1e-3)).collect();
+    let (occ0, occ1) = (occupied(&a0, RES), occupied(&a1, RES));
+    let (b0, b1) = (blob_at(0.0), blob_at(1.0));
+    assert!(b0.is_subset(&occ0) && b1.is_subset(&occ1), "dynamic voxels present at both times");
+    for vox in b0.difference(&b1).filter(|v| !static_allowed.contains(v)) {
+        assert!(!occ1.contains(vox), "old dynamic voxel {vox:?} survived the move");
+    }
+    let idx = |(i, j, k): Voxel| (i + RES * (j + RES * k)) as usize;
+    let w0: Vec<u32> = bytemuck::pod_collect_to_vec(&a0);
+    let w1: Vec<u32> = bytemuck::pod_collect_to_vec(&a1);
+    let mut checked = 0;
+    for vox in &static_set {
+        if b0.contains(vox) || b1.contains(vox) {
+            continue;
+        }
+        assert_eq!(flags[idx(*vox)], 1, "static voxel {vox:?} is flagged");
+        assert_eq!(w0[idx(*vox)], w1[idx(*vox)], "static voxel {vox:?} changed");
+        checked += 1;
+    }
+    assert!(checked > 500, "checked {checked} static voxels");
+    // Nothing but static and dynamic geometry is set.
+    let everything: BTreeSet<Voxel> = static_allowed
+        .union(&blob.iter().flat_map(|t| reference(&t.map(|p| motion.matrix(1.0).transform_point3(p)), 1e-3)).collect())
+        .cloned()
+        .collect();
+    assert!(occ1.is_subset(&everything));
+    assert_no_validation_messages(&ctx);
+}
