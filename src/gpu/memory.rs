@@ -270,6 +270,23 @@ impl Image {
         .vk("vkCreateImageView")
     }
 
+    /// Buffer copy region covering mip 0, layer 0 (all depth slices), tightly packed.
+    pub fn copy_region(&self) -> vk::BufferImageCopy {
+        vk::BufferImageCopy {
+            buffer_offset: 0,
+            buffer_row_length: 0,
+            buffer_image_height: 0,
+            image_subresource: vk::ImageSubresourceLayers {
+                aspect_mask: self.desc.aspect(),
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            },
+            image_offset: vk::Offset3D::default(),
+            image_extent: self.desc.extent,
+        }
+    }
+
     pub fn extent2d(&self) -> vk::Extent2D {
         vk::Extent2D { width: self.desc.extent.width, height: self.desc.extent.height }
     }

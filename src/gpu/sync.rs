@@ -15,7 +15,7 @@ pub enum Access {
     // ----- reads -----
     IndexBuffer,
     VertexBuffer,
-    /// Uniform or storage buffer read by vertex/geometry/fragment shaders.
+    /// Uniform or storage buffer read by vertex and fragment shaders.
     GraphicsShaderReadBuffer,
     /// Uniform or storage buffer read by compute shaders.
     ComputeShaderReadBuffer,
@@ -36,7 +36,7 @@ pub enum Access {
     DepthAttachmentWrite,
     /// Storage image/buffer write (or read-write) in compute shaders.
     ComputeShaderWrite,
-    /// Storage image/buffer write (or read-write, atomics) in fragment/geometry shaders.
+    /// Storage image/buffer write (or read-write, atomics) in fragment shaders.
     FragmentShaderWrite,
     TransferWrite,
     HostWrite,
@@ -60,12 +60,9 @@ impl Access {
             Access::Nothing => (S::NONE, A::NONE, L::UNDEFINED, false),
             Access::IndexBuffer => (S::INDEX_INPUT, A::INDEX_READ, L::UNDEFINED, false),
             Access::VertexBuffer => (S::VERTEX_ATTRIBUTE_INPUT, A::VERTEX_ATTRIBUTE_READ, L::UNDEFINED, false),
-            Access::GraphicsShaderReadBuffer => (
-                S::VERTEX_SHADER | S::GEOMETRY_SHADER | S::FRAGMENT_SHADER,
-                A::SHADER_STORAGE_READ | A::UNIFORM_READ,
-                L::UNDEFINED,
-                false,
-            ),
+            Access::GraphicsShaderReadBuffer => {
+                (S::VERTEX_SHADER | S::FRAGMENT_SHADER, A::SHADER_STORAGE_READ | A::UNIFORM_READ, L::UNDEFINED, false)
+            }
             Access::ComputeShaderReadBuffer => {
                 (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ | A::UNIFORM_READ, L::UNDEFINED, false)
             }
@@ -102,12 +99,9 @@ impl Access {
             Access::ComputeShaderWrite => {
                 (S::COMPUTE_SHADER, A::SHADER_STORAGE_WRITE | A::SHADER_STORAGE_READ, L::GENERAL, true)
             }
-            Access::FragmentShaderWrite => (
-                S::GEOMETRY_SHADER | S::FRAGMENT_SHADER,
-                A::SHADER_STORAGE_WRITE | A::SHADER_STORAGE_READ,
-                L::GENERAL,
-                true,
-            ),
+            Access::FragmentShaderWrite => {
+                (S::FRAGMENT_SHADER, A::SHADER_STORAGE_WRITE | A::SHADER_STORAGE_READ, L::GENERAL, true)
+            }
             Access::TransferWrite => (S::COPY | S::CLEAR, A::TRANSFER_WRITE, L::TRANSFER_DST_OPTIMAL, true),
             Access::HostWrite => (S::HOST, A::HOST_WRITE, L::GENERAL, true),
         };

@@ -40,10 +40,12 @@ pub struct Use<'a> {
 }
 
 impl<'a> Use<'a> {
-    pub fn read_image(image: &'a Image, access: Access) -> Self {
+    /// Access an image, keeping its contents.
+    pub fn image(image: &'a Image, access: Access) -> Self {
         Use { res: Res::Image(image), access, discard: false }
     }
-    pub fn write_image(image: &'a Image, access: Access) -> Self {
+    /// Overwrite a whole image: its previous contents are discarded.
+    pub fn overwrite(image: &'a Image, access: Access) -> Self {
         Use { res: Res::Image(image), access, discard: true }
     }
     pub fn buffer(buffer: &'a Buffer, access: Access) -> Self {
@@ -110,11 +112,6 @@ impl StateTracker {
             self.state.insert(res.key(), next);
         }
         out
-    }
-
-    /// Forget a resource (it was destroyed or re-created).
-    pub fn forget(&mut self, key: u64) {
-        self.state.remove(&key);
     }
 }
 

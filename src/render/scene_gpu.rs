@@ -133,19 +133,7 @@ pub fn upload_texture(ctx: &Arc<Context>, name: &str, width: u32, height: u32, r
             staging.raw,
             image.raw,
             vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            &[vk::BufferImageCopy {
-                buffer_offset: 0,
-                buffer_row_length: 0,
-                buffer_image_height: 0,
-                image_subresource: vk::ImageSubresourceLayers {
-                    aspect_mask: vk::ImageAspectFlags::COLOR,
-                    mip_level: 0,
-                    base_array_layer: 0,
-                    layer_count: 1,
-                },
-                image_offset: vk::Offset3D::default(),
-                image_extent: image.desc.extent,
-            }],
+            &[image.copy_region()],
         );
         let to_read = barrier(
             &[Access::TransferWrite],

@@ -2,7 +2,8 @@
 //! given, otherwise the world bounds at the scene time grown by 5% (so surfaces on the scene's
 //! boundary are not on the grid's faces). Volumes are created only when the scene needs them.
 
-use crate::gpu::{Buffer, Context, GpuError, GpuResult, Image, ImageDesc};
+use crate::gpu::{Access, Buffer, Context, GpuError, GpuResult, Image, ImageDesc};
+use crate::render::graph::Use;
 use crate::scene::{Aabb, Scene};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -45,11 +46,6 @@ impl VoxelGrid {
             Some(b) => VoxelGrid::around(b, res, 0.0),
             None => VoxelGrid::around(scene.world_bounds(scene.settings.time), res, 0.05),
         }
-    }
-
-    /// World position of voxel (i, j, k)'s centre.
-    pub fn center_of(&self, i: u32, j: u32, k: u32) -> Vec3 {
-        self.origin + (Vec3::new(i as f32, j as f32, k as f32) + 0.5) * self.voxel_size
     }
 }
 
@@ -139,6 +135,18 @@ impl VoxelVolumes {
         v.extend(self.emission.as_ref());
         v.extend(self.flags.as_ref());
         v
+    }
+
+    /// Uses of the averaged volumes (albedo, normal, emission) by a pass that writes them with
+    /// `access`, keeping their contents, plus the flag volume (or its placeholder) with `flags`.
+    pub fn uses(&self, access: Access, flags: Access) -> Vec<Use<'_>> {
+        let mut uses = vec![
+            Use::image(&self.albedo, access),
+            Use::image(&self.normal, access),
+            Use::image(self.flags_or_placeholder(), flags),
+        ];
+        uses.extend(self.emission.as_ref().map(|e| Use::image(e, access)));
+        uses
     }
 
     /// The volume bound where the emission volume goes (albedo stands in, never written).

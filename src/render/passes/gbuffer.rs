@@ -103,11 +103,11 @@ impl Pass for GBufferPass {
     fn uses(&self) -> Vec<Use<'_>> {
         let g = &self.gbuffer;
         vec![
-            Use::write_image(&g.depth, Access::DepthAttachmentWrite),
-            Use::write_image(&g.albedo, Access::ColorAttachmentWrite),
-            Use::write_image(&g.normal, Access::ColorAttachmentWrite),
-            Use::write_image(&g.specular, Access::ColorAttachmentWrite),
-            Use::write_image(&g.emission, Access::ColorAttachmentWrite),
+            Use::overwrite(&g.depth, Access::DepthAttachmentWrite),
+            Use::overwrite(&g.albedo, Access::ColorAttachmentWrite),
+            Use::overwrite(&g.normal, Access::ColorAttachmentWrite),
+            Use::overwrite(&g.specular, Access::ColorAttachmentWrite),
+            Use::overwrite(&g.emission, Access::ColorAttachmentWrite),
         ]
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {

@@ -88,13 +88,13 @@ impl Pass for LightingPass {
     fn uses(&self) -> Vec<Use<'_>> {
         let g = &self.gbuffer;
         vec![
-            Use::read_image(&g.depth, Access::ComputeShaderReadDepth),
-            Use::read_image(&g.albedo, Access::ComputeShaderReadSampled),
-            Use::read_image(&g.normal, Access::ComputeShaderReadSampled),
-            Use::read_image(&g.specular, Access::ComputeShaderReadSampled),
-            Use::read_image(&g.emission, Access::ComputeShaderReadSampled),
-            Use::read_image(&self.shadow_atlas, Access::ComputeShaderReadDepth),
-            Use::write_image(&self.radiance, Access::ComputeShaderWrite),
+            Use::image(&g.depth, Access::ComputeShaderReadDepth),
+            Use::image(&g.albedo, Access::ComputeShaderReadSampled),
+            Use::image(&g.normal, Access::ComputeShaderReadSampled),
+            Use::image(&g.specular, Access::ComputeShaderReadSampled),
+            Use::image(&g.emission, Access::ComputeShaderReadSampled),
+            Use::image(&self.shadow_atlas, Access::ComputeShaderReadDepth),
+            Use::overwrite(&self.radiance, Access::ComputeShaderWrite),
         ]
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {

@@ -56,29 +56,16 @@ impl Pass for ImageDownload {
         &self.name
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        vec![Use::read_image(&self.image, Access::TransferRead), Use::buffer(&self.buffer, Access::TransferWrite)]
+        vec![Use::image(&self.image, Access::TransferRead), Use::buffer(&self.buffer, Access::TransferWrite)]
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
-        let region = vk::BufferImageCopy {
-            buffer_offset: 0,
-            buffer_row_length: 0,
-            buffer_image_height: 0,
-            image_subresource: vk::ImageSubresourceLayers {
-                aspect_mask: vk::ImageAspectFlags::COLOR,
-                mip_level: 0,
-                base_array_layer: 0,
-                layer_count: 1,
-            },
-            image_offset: vk::Offset3D::default(),
-            image_extent: self.image.desc.extent,
-        };
         unsafe {
             ctx.device.cmd_copy_image_to_buffer(
                 cmd,
                 self.image.raw,
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                 self.buffer.raw,
-                &[region],
+                &[self.image.copy_region()],
             )
         };
     }

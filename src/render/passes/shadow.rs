@@ -60,7 +60,7 @@ impl Pass for ShadowPass {
         "shadow maps"
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        vec![Use::write_image(&self.atlas, Access::DepthAttachmentWrite)]
+        vec![Use::overwrite(&self.atlas, Access::DepthAttachmentWrite)]
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let extent = self.atlas.extent2d();

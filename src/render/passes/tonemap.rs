@@ -40,8 +40,8 @@ impl Pass for TonemapPass {
     }
     fn uses(&self) -> Vec<Use<'_>> {
         vec![
-            Use::read_image(&self.radiance, Access::ComputeShaderReadStorage),
-            Use::write_image(&self.display, Access::ComputeShaderWrite),
+            Use::image(&self.radiance, Access::ComputeShaderReadStorage),
+            Use::overwrite(&self.display, Access::ComputeShaderWrite),
         ]
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {

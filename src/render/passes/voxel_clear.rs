@@ -23,7 +23,7 @@ impl Pass for VoxelClearPass {
         "voxel clear"
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        self.volumes.all().into_iter().map(|v| Use::write_image(v, Access::TransferWrite)).collect()
+        self.volumes.all().into_iter().map(|v| Use::overwrite(v, Access::TransferWrite)).collect()
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         for v in self.volumes.all() {
@@ -77,16 +77,7 @@ impl Pass for DynamicClearPass {
         "voxel clear dynamic"
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        let v = &self.volumes;
-        let mut uses = vec![
-            Use::read_image(&v.albedo, Access::ComputeShaderWrite),
-            Use::read_image(&v.normal, Access::ComputeShaderWrite),
-            Use::read_image(v.flags_or_placeholder(), Access::ComputeShaderReadStorage),
-        ];
-        if let Some(e) = &v.emission {
-            uses.push(Use::read_image(e, Access::ComputeShaderWrite));
-        }
-        uses
+        self.volumes.uses(Access::ComputeShaderWrite, Access::ComputeShaderReadStorage)
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let g = group_count(self.volumes.grid.resolution, 4);

@@ -54,8 +54,8 @@ impl Pass for VoxelViewPass {
     }
     fn uses(&self) -> Vec<Use<'_>> {
         vec![
-            Use::read_image(&self.volume, Access::ComputeShaderReadStorage),
-            Use::write_image(&self.radiance, Access::ComputeShaderWrite),
+            Use::image(&self.volume, Access::ComputeShaderReadStorage),
+            Use::overwrite(&self.radiance, Access::ComputeShaderWrite),
         ]
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {

@@ -96,16 +96,7 @@ impl Pass for VoxelizePass {
         }
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        let v = &self.voxelizer.volumes;
-        let mut uses = vec![
-            Use::read_image(&v.albedo, Access::FragmentShaderWrite),
-            Use::read_image(&v.normal, Access::FragmentShaderWrite),
-            Use::read_image(v.flags_or_placeholder(), Access::FragmentShaderWrite),
-        ];
-        if let Some(e) = &v.emission {
-            uses.push(Use::read_image(e, Access::FragmentShaderWrite));
-        }
-        uses
+        self.voxelizer.volumes.uses(Access::FragmentShaderWrite, Access::FragmentShaderWrite)
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let res = self.voxelizer.volumes.grid.resolution;
