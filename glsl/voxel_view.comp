@@ -6,12 +6,13 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(constant_id = 0) const uint MODE = 0;  // 0 albedo, 1 normal, 2 emission, 3 none (black)
+layout(constant_id = 0) const uint MODE = 0;  // 0 albedo, 1 normal, 2 emission, 3 none (black), 4 radiance
 
 layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1) uniform GridBlock { VoxelGrid grid; };
 layout(set = 0, binding = 2, r32ui) uniform readonly uimage3D volume;
 layout(set = 0, binding = 3, rgba32f) uniform writeonly image2D out_radiance;
+layout(set = 0, binding = 4, rgba16f) uniform readonly image3D vox_radiance;
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -39,6 +40,7 @@ void main() {
             if ((v >> 24) != 0u) {
                 vec3 rgb = unpack_rgb_count(v).rgb / 255.0;
                 result.rgb = MODE == 2u ? rgb * grid.params.x : (MODE == 3u ? vec3(0.0) : rgb);
+                if (MODE == 4u) result.rgb = imageLoad(vox_radiance, c).rgb;
                 break;
             }
             if (next.x < next.y && next.x < next.z) {

@@ -40,7 +40,7 @@ enum Command {
         /// Scene time in seconds at which motion is evaluated (overrides render.time).
         #[arg(long)]
         time: Option<f32>,
-        /// What to show: final | voxel-albedo | voxel-normal | voxel-emission
+        /// What to show: final | voxel-albedo | voxel-normal | voxel-emission | voxel-radiance
         /// (overrides render.view).
         #[arg(long)]
         view: Option<String>,

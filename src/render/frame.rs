@@ -8,6 +8,7 @@ use super::passes::readback::ReadbackPasses;
 use super::passes::shadow::ShadowPass;
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::voxel_clear::{DynamicClearPass, VoxelClearPass};
+use super::passes::voxel_light::VoxelLightPass;
 use super::passes::voxel_view::VoxelViewPass;
 use super::passes::voxelize::{VoxelizePass, Voxelizer};
 use super::scene_gpu::SceneGpu;
@@ -25,6 +26,7 @@ pub struct VoxelPasses {
     pub voxelize_static: VoxelizePass,
     /// Only with dynamic objects.
     pub dynamic: Option<(DynamicClearPass, VoxelizePass)>,
+    pub light: VoxelLightPass,
 }
 
 /// How the frame shades pixels.
@@ -101,6 +103,7 @@ impl FramePasses {
                 None
             };
             Some(VoxelPasses {
+                light: VoxelLightPass::new(ctx, frame, &volumes, &atlas, &s.gi)?,
                 clear: VoxelClearPass::new(&volumes),
                 voxelize_static: VoxelizePass::new(&voxelizer, false),
                 dynamic,
@@ -150,15 +153,24 @@ impl FramePasses {
                 passes.push(voxelize);
             }
         }
+        let lit_voxels = match &self.shading {
+            Shading::Lighting(_) => true,
+            Shading::VoxelView(view) => view.shows_radiance(),
+        };
+        if lit_voxels {
+            if let Some(shadow) = &self.shadow {
+                passes.push(shadow);
+            }
+            if let Some(v) = &self.voxels {
+                passes.push(&v.light);
+            }
+        }
         match &self.shading {
             Shading::Lighting(lighting) => {
-                if let Some(shadow) = &self.shadow {
-                    passes.push(shadow);
-                }
                 passes.push(&self.gbuffer);
                 passes.push(lighting);
             }
-            // A voxel view needs neither shadows nor the G-buffer.
+            // A voxel view needs no G-buffer.
             Shading::VoxelView(view) => passes.push(view),
         }
         passes.push(&self.tonemap);

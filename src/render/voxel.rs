@@ -11,6 +11,8 @@ use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
+pub const RADIANCE_VOLUME_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+
 /// Mirrors `VoxelGrid` in glsl/include/voxel.glsl.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable, Debug)]
@@ -78,6 +80,8 @@ pub struct VoxelVolumes {
     pub emission: Option<Arc<Image>>,
     /// Only with dynamic objects: 1 where static geometry was voxelized (R8_UINT).
     pub flags: Option<Arc<Image>>,
+    /// Outgoing radiance of the lit voxels (RGBA16F, alpha = occupancy).
+    pub radiance: Arc<Image>,
     /// Bound in place of `flags` when there is none (a 1-voxel volume).
     pub flags_placeholder: Option<Arc<Image>>,
     /// Emitted radiance that maps to 255 in the emission volume.
@@ -116,6 +120,7 @@ impl VoxelVolumes {
             needs,
             grid_buffer,
             albedo: volume("voxel albedo", vk::Format::R32_UINT)?,
+            radiance: volume("voxel radiance", RADIANCE_VOLUME_FORMAT)?,
             normal: volume("voxel normal", vk::Format::R32_UINT)?,
             emission: needs.emission.then(|| volume("voxel emission", vk::Format::R32_UINT)).transpose()?,
             flags: needs.dynamic.then(|| volume("voxel static flags", vk::Format::R8_UINT)).transpose()?,
@@ -134,6 +139,7 @@ impl VoxelVolumes {
         let mut v = vec![&self.albedo, &self.normal];
         v.extend(self.emission.as_ref());
         v.extend(self.flags.as_ref());
+        v.push(&self.radiance);
         v
     }
 

@@ -109,12 +109,21 @@ pub(crate) struct RenderDef {
 pub(crate) struct GiDef {
     pub mode: GiMode,
     pub voxel_resolution: u32,
+    pub attenuation: VoxelAttenuation,
+    pub occlusion: VoxelOcclusion,
+    pub voxel_shadow_softness: f32,
 }
 
 impl Default for GiDef {
     fn default() -> Self {
         let d = GiSettings::default();
-        GiDef { mode: d.mode, voxel_resolution: d.voxel_resolution }
+        GiDef {
+            mode: d.mode,
+            voxel_resolution: d.voxel_resolution,
+            attenuation: d.attenuation,
+            occlusion: d.occlusion,
+            voxel_shadow_softness: d.voxel_shadow_softness,
+        }
     }
 }
 
@@ -302,7 +311,7 @@ pub(crate) struct LightDef {
 // The keys of each table, for `--set` (keys that are optional may be absent from the
 // serialized tree but can still be set). A unit test checks these against the structs.
 pub(crate) const TOP_KEYS: &[&str] = &["scene", "camera", "render", "gi", "materials", "objects", "lights"];
-pub(crate) const GI_KEYS: &[&str] = &["mode", "voxel_resolution"];
+pub(crate) const GI_KEYS: &[&str] = &["mode", "voxel_resolution", "attenuation", "occlusion", "voxel_shadow_softness"];
 pub(crate) const SCENE_KEYS: &[&str] = &["name", "search_paths", "bounds"];
 pub(crate) const BOUNDS_KEYS: &[&str] = &["min", "max"];
 pub(crate) const CAMERA_KEYS: &[&str] = &["position", "target", "up", "fov_y", "near", "far"];
@@ -709,8 +718,17 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         shadow_filter_radius: ctx.scalar("render.shadow_filter_radius", r.shadow_filter_radius)?,
         shadow_normal_bias: ctx.scalar("render.shadow_normal_bias", r.shadow_normal_bias)?,
         view: r.view,
-        gi: GiSettings { mode: file.gi.mode, voxel_resolution: file.gi.voxel_resolution },
+        gi: GiSettings {
+            mode: file.gi.mode,
+            voxel_resolution: file.gi.voxel_resolution,
+            attenuation: file.gi.attenuation,
+            occlusion: file.gi.occlusion,
+            voxel_shadow_softness: ctx.scalar("gi.voxel_shadow_softness", file.gi.voxel_shadow_softness)?,
+        },
     };
+    if settings.gi.voxel_shadow_softness < 0.0 {
+        return Err(ctx.invalid("gi.voxel_shadow_softness", "must be >= 0"));
+    }
     let res = settings.gi.voxel_resolution;
     if !(8..=512).contains(&res) || !res.is_power_of_two() {
         return Err(ctx.invalid("gi.voxel_resolution", format!("{res} is not a power of two in 8..=512")));

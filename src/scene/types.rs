@@ -303,6 +303,28 @@ pub enum View {
     VoxelNormal,
     /// The voxelized emitted radiance.
     VoxelEmission,
+    /// The lit voxels' outgoing radiance.
+    VoxelRadiance,
+}
+
+/// How voxel lighting attenuates light by the voxel's (averaged) normal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum VoxelAttenuation {
+    /// The seed technique's: per-axis clamped cosines weighted by the squared normal components.
+    NormalWeighted,
+    /// Plain max(N.L, 0) with the normalized average normal.
+    NDotL,
+}
+
+/// How voxel lighting decides whether a light reaches a voxel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum VoxelOcclusion {
+    /// The frame's shadow maps, at the voxel centre pushed half a voxel along its normal.
+    ShadowMap,
+    /// Marching the voxel grid towards the light (soft with `voxel_shadow_softness` > 0).
+    Raymarch,
 }
 
 /// Voxel global illumination settings (the `[gi]` table).
@@ -311,11 +333,21 @@ pub struct GiSettings {
     pub mode: GiMode,
     /// Voxels along each side of the cubic grid: a power of two in 8..=512.
     pub voxel_resolution: u32,
+    pub attenuation: VoxelAttenuation,
+    pub occlusion: VoxelOcclusion,
+    /// Ray-marched shadows only: 0 = hard; larger values soften with distance (nu accumulation).
+    pub voxel_shadow_softness: f32,
 }
 
 impl Default for GiSettings {
     fn default() -> Self {
-        GiSettings { mode: GiMode::None, voxel_resolution: 128 }
+        GiSettings {
+            mode: GiMode::None,
+            voxel_resolution: 128,
+            attenuation: VoxelAttenuation::NormalWeighted,
+            occlusion: VoxelOcclusion::ShadowMap,
+            voxel_shadow_softness: 0.0,
+        }
     }
 }
 

@@ -8,6 +8,19 @@ use crate::render::FrameBuffers;
 use ash::vk;
 use std::sync::Arc;
 
+/// Hardware depth comparison with bilinear filtering; outside the map counts as lit.
+pub fn shadow_sampler_info() -> vk::SamplerCreateInfo<'static> {
+    vk::SamplerCreateInfo::default()
+        .mag_filter(vk::Filter::LINEAR)
+        .min_filter(vk::Filter::LINEAR)
+        .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_BORDER)
+        .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_BORDER)
+        .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_BORDER)
+        .border_color(vk::BorderColor::FLOAT_OPAQUE_WHITE)
+        .compare_enable(true)
+        .compare_op(vk::CompareOp::LESS_OR_EQUAL)
+}
+
 pub struct LightingPass {
     gbuffer: Arc<GBuffer>,
     shadow_atlas: Arc<Image>,
@@ -35,20 +48,7 @@ impl LightingPass {
                 .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
                 .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE),
         )?;
-        // Hardware depth comparison with bilinear filtering; outside the map counts as lit.
-        let compare = Sampler::new(
-            ctx,
-            "shadow compare sampler",
-            &vk::SamplerCreateInfo::default()
-                .mag_filter(vk::Filter::LINEAR)
-                .min_filter(vk::Filter::LINEAR)
-                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_BORDER)
-                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_BORDER)
-                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_BORDER)
-                .border_color(vk::BorderColor::FLOAT_OPAQUE_WHITE)
-                .compare_enable(true)
-                .compare_op(vk::CompareOp::LESS_OR_EQUAL),
-        )?;
+        let compare = Sampler::new(ctx, "shadow compare sampler", &shadow_sampler_info())?;
         let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let depth_ro = vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL;
         let set = DescriptorSet::new(

@@ -6,6 +6,7 @@ pub mod readback;
 pub mod shadow;
 pub mod tonemap;
 pub mod voxel_clear;
+pub mod voxel_light;
 pub mod voxel_view;
 pub mod voxelize;
 

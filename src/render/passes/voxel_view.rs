@@ -12,6 +12,8 @@ use std::sync::Arc;
 
 pub struct VoxelViewPass {
     volume: Arc<Image>,
+    voxel_radiance: Arc<Image>,
+    view: View,
     pub radiance: Arc<Image>,
     pipeline: Pipeline,
     set: DescriptorSet,
@@ -27,6 +29,7 @@ impl VoxelViewPass {
     ) -> GpuResult<Self> {
         let (volume, mode) = match view {
             View::VoxelNormal => (&volumes.normal, 1),
+            View::VoxelRadiance => (&volumes.albedo, 4),
             View::VoxelEmission => (volumes.emission_or_albedo(), 2),
             _ => (&volumes.albedo, 0),
         };
@@ -41,10 +44,25 @@ impl VoxelViewPass {
                 Bind::Uniform(&volumes.grid_buffer),
                 Bind::StorageImage(volume.view),
                 Bind::StorageImage(radiance.view),
+                Bind::StorageImage(volumes.radiance.view),
             ],
         )?;
         let pipeline = Pipeline::compute(ctx, "voxel view", shaders::VOXEL_VIEW_COMP, &[set.layout], 0, &[(0, mode)])?;
-        Ok(VoxelViewPass { volume: volume.clone(), radiance: radiance.clone(), pipeline, set })
+        Ok(VoxelViewPass {
+            volume: volume.clone(),
+            voxel_radiance: volumes.radiance.clone(),
+            view,
+            radiance: radiance.clone(),
+            pipeline,
+            set,
+        })
+    }
+}
+
+impl VoxelViewPass {
+    /// The view shows lit voxels (the voxel lighting must run first).
+    pub fn shows_radiance(&self) -> bool {
+        self.view == View::VoxelRadiance
     }
 }
 
@@ -55,6 +73,7 @@ impl Pass for VoxelViewPass {
     fn uses(&self) -> Vec<Use<'_>> {
         vec![
             Use::image(&self.volume, Access::ComputeShaderReadStorage),
+            Use::image(&self.voxel_radiance, Access::ComputeShaderReadStorage),
             Use::overwrite(&self.radiance, Access::ComputeShaderWrite),
         ]
     }

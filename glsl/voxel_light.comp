@@ -1,0 +1,121 @@
+#version 460
+// Voxel illumination: outgoing radiance of every occupied voxel, treated as a Lambertian
+// surface with the voxel's average albedo and normal:
+//   L = albedo/pi * sum_lights(E * attenuation * visibility) + emission
+// stored as RGBA16F (alpha = 1 where occupied), clamped below the half-float maximum.
+#include "common.glsl"
+#include "lights.glsl"
+#include "shadow.glsl"
+#include "voxel.glsl"
+
+layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
+
+layout(constant_id = 0) const bool HAS_EMISSION = false;
+layout(constant_id = 1) const bool NORMAL_WEIGHTED = true;
+layout(constant_id = 2) const bool RAYMARCH = false;
+
+layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
+layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
+layout(set = 0, binding = 2, std430) readonly buffer ShadowViews { ShadowView views[]; };
+layout(set = 0, binding = 3) uniform sampler2DArrayShadow shadow_map;
+layout(set = 0, binding = 4) uniform GridBlock { VoxelGrid grid; };
+layout(set = 0, binding = 5, r32ui) uniform readonly uimage3D vox_albedo;
+layout(set = 0, binding = 6, r32ui) uniform readonly uimage3D vox_normal;
+layout(set = 0, binding = 7, r32ui) uniform readonly uimage3D vox_emission;
+layout(set = 0, binding = 8, rgba16f) uniform writeonly image3D vox_radiance;
+
+layout(push_constant) uniform Push { float softness; } pc;
+
+bool occupied(ivec3 c) {
+    int res = int(grid.dims.x);
+    if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(res)))) return false;
+    return (imageLoad(vox_albedo, c).r >> 24) != 0u;
+}
+
+// Trilinear occupancy at grid position g (voxel units).
+float occupancy(vec3 g) {
+    vec3 f = g - 0.5;
+    ivec3 b = ivec3(floor(f));
+    vec3 w = f - vec3(b);
+    float o = 0.0;
+    for (int i = 0; i < 8; ++i) {
+        ivec3 d = ivec3(i & 1, (i >> 1) & 1, i >> 2);
+        vec3 wd = mix(1.0 - w, w, vec3(d));
+        o += (occupied(b + d) ? 1.0 : 0.0) * wd.x * wd.y * wd.z;
+    }
+    return o;
+}
+
+// Visibility of the light along wi from grid position g over `dist` voxels: hard (any
+// occupied voxel blocks) or soft (occlusion accumulated with weight softness / distance).
+// The caller starts g off the surface (along the normal) so grazing rays do not run inside
+// the surface's own voxel layer.
+float raymarch_visibility(vec3 g, vec3 wi, float dist) {
+    float occlusion = 0.0;
+    float t = 0.5;
+    float res = float(grid.dims.x);
+    float tmax = min(dist, 2.0 * res);
+    while (t < tmax && occlusion < 1.0) {
+        vec3 p = g + wi * t;
+        if (any(lessThan(p, vec3(0.0))) || any(greaterThan(p, vec3(res)))) break;
+        if (pc.softness <= 0.0) {
+            if (occupied(ivec3(floor(p)))) return 0.0;
+        } else {
+            occlusion += (1.0 - occlusion) * occupancy(p) * min(pc.softness / t, 1.0);
+        }
+        t += 0.5;
+    }
+    return clamp(1.0 - occlusion, 0.0, 1.0);
+}
+
+float attenuation(vec3 n_avg, vec3 wi) {
+    if (NORMAL_WEIGHTED) {
+        // Each axis-aligned face of the voxel that faces the light receives cos = |wi.axis|,
+        // weighted by how much of the average normal points that way.
+        vec3 nn = safe_normalize(n_avg, vec3(0.0));
+        vec3 w = nn * nn;
+        vec3 c = max(wi * sign(nn), 0.0);
+        return dot(w, c);
+    }
+    return max(dot(safe_normalize(n_avg, vec3(0.0)), wi), 0.0);
+}
+
+void main() {
+    ivec3 c = ivec3(gl_GlobalInvocationID);
+    int res = int(grid.dims.x);
+    if (any(greaterThanEqual(c, ivec3(res)))) return;
+    uint a = imageLoad(vox_albedo, c).r;
+    if ((a >> 24) == 0u) {
+        imageStore(vox_radiance, c, vec4(0.0));
+        return;
+    }
+    vec3 albedo = unpack_rgb_count(a).rgb / 255.0;
+    vec3 n_avg = unpack_rgb_count(imageLoad(vox_normal, c).r).rgb / 255.0 * 2.0 - 1.0;
+    vec3 N = safe_normalize(n_avg, vec3(0.0, 1.0, 0.0));
+    float voxel = grid.origin.w;
+    vec3 center = grid.origin.xyz + (vec3(c) + 0.5) * voxel;
+    vec3 irradiance = vec3(0.0);
+    for (uint i = 0u; i < frame.counts.z; ++i) {
+        Light l = lights[i];
+        LightSample s = sample_light(l, center);
+        float att = attenuation(n_avg, s.wi);
+        if (att <= 0.0 || max(s.irradiance.r, max(s.irradiance.g, s.irradiance.b)) <= 0.0) continue;
+        float vis = 1.0;
+        if (RAYMARCH) {
+            vec3 g = (center - grid.origin.xyz) / voxel + N * 1.5;
+            float dist = s.distance > 0.0 ? s.distance / voxel - 1.5 : 1e30;
+            vis = raymarch_visibility(g, s.wi, dist);
+        } else if (l.shadow.x >= 0) {
+            vec3 P = center + N * (0.5 * voxel);
+            int layer = shadow_view_index(l, P);
+            vis = shadow_visibility(shadow_map, views[layer], layer, P, N, s.wi, s.distance,
+                                    frame.shadow.x, frame.shadow.y, frame.shadow.z);
+        }
+        irradiance += s.irradiance * att * vis;
+    }
+    vec3 radiance = albedo * INV_PI * irradiance;
+    if (HAS_EMISSION) {
+        radiance += unpack_rgb_count(imageLoad(vox_emission, c).r).rgb / 255.0 * grid.params.x;
+    }
+    imageStore(vox_radiance, c, vec4(min(radiance, vec3(HALF_MAX)), 1.0));
+}
