@@ -2,7 +2,7 @@
 //! given, otherwise the world bounds at the scene time grown by 5% (so surfaces on the scene's
 //! boundary are not on the grid's faces). Volumes are created only when the scene needs them.
 
-use crate::gpu::{Access, Buffer, Context, GpuError, GpuResult, Image, ImageDesc};
+use crate::gpu::{Access, Bind, Buffer, Context, GpuError, GpuResult, Image, ImageDesc};
 use crate::render::graph::Use;
 use crate::scene::{Aabb, Scene};
 use ash::vk;
@@ -153,6 +153,18 @@ impl VoxelVolumes {
         ];
         uses.extend(self.emission.as_ref().map(|e| Use::image(e, access)));
         uses
+    }
+
+    /// Grid uniform, albedo, normal, emission (or albedo), flags (or placeholder): the
+    /// bindings, in this order, of every pass that writes the averaged volumes.
+    pub fn binds(&self) -> [Bind<'_>; 5] {
+        [
+            Bind::Uniform(&self.grid_buffer),
+            Bind::StorageImage(self.albedo.view),
+            Bind::StorageImage(self.normal.view),
+            Bind::StorageImage(self.emission_or_albedo().view),
+            Bind::StorageImage(self.flags_or_placeholder().view),
+        ]
     }
 
     /// The volume bound where the emission volume goes (albedo stands in, never written).

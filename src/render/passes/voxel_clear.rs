@@ -2,7 +2,7 @@
 //! dynamic update only the voxels not marked static (compute).
 
 use crate::gpu::pipeline::group_count;
-use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Pipeline};
+use crate::gpu::{shaders, Access, Context, DescriptorSet, GpuResult, Pipeline};
 use crate::render::graph::{Pass, Use};
 use crate::render::voxel::VoxelVolumes;
 use ash::vk;
@@ -48,18 +48,7 @@ pub struct DynamicClearPass {
 
 impl DynamicClearPass {
     pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>) -> GpuResult<Self> {
-        let set = DescriptorSet::new(
-            ctx,
-            "voxel clear dynamic",
-            vk::ShaderStageFlags::COMPUTE,
-            &[
-                Bind::Uniform(&volumes.grid_buffer),
-                Bind::StorageImage(volumes.albedo.view),
-                Bind::StorageImage(volumes.normal.view),
-                Bind::StorageImage(volumes.emission_or_albedo().view),
-                Bind::StorageImage(volumes.flags_or_placeholder().view),
-            ],
-        )?;
+        let set = DescriptorSet::new(ctx, "voxel clear dynamic", vk::ShaderStageFlags::COMPUTE, &volumes.binds())?;
         let pipeline = Pipeline::compute(
             ctx,
             "voxel clear dynamic",

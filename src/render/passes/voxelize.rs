@@ -28,21 +28,18 @@ impl Voxelizer {
         volumes: &Arc<VoxelVolumes>,
     ) -> GpuResult<Arc<Self>> {
         let views = scene.texture_views();
+        let mut binds = vec![
+            Bind::Uniform(&frame.uniforms),
+            Bind::Storage(&scene.instances),
+            Bind::Storage(&scene.materials),
+            Bind::SampledArray(views.clone(), scene.texture_sampler.raw, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
+        ];
+        binds.extend(volumes.binds());
         let set = DescriptorSet::new(
             ctx,
             "voxelize",
             vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::GEOMETRY | vk::ShaderStageFlags::FRAGMENT,
-            &[
-                Bind::Uniform(&frame.uniforms),
-                Bind::Storage(&scene.instances),
-                Bind::Storage(&scene.materials),
-                Bind::SampledArray(views.clone(), scene.texture_sampler.raw, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
-                Bind::Uniform(&volumes.grid_buffer),
-                Bind::StorageImage(volumes.albedo.view),
-                Bind::StorageImage(volumes.normal.view),
-                Bind::StorageImage(volumes.emission_or_albedo().view),
-                Bind::StorageImage(volumes.flags_or_placeholder().view),
-            ],
+            &binds,
         )?;
         let hardware_conservative = ctx.info.optional.conservative_rasterization;
         let pipeline = Pipeline::graphics(
