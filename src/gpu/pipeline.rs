@@ -390,6 +390,13 @@ impl Pipeline {
         }
     }
 
+    /// Dispatch enough workgroups of `local_size` (the shader's local_size_x/y/z) to cover
+    /// `items` invocations in each dimension, rounding up.
+    pub fn dispatch(&self, cmd: vk::CommandBuffer, items: [u32; 3], local_size: [u32; 3]) {
+        let g = |i: usize| group_count(items[i], local_size[i]);
+        unsafe { self.ctx.device.cmd_dispatch(cmd, g(0), g(1), g(2)) };
+    }
+
     pub fn push<T: bytemuck::Pod>(&self, cmd: vk::CommandBuffer, data: &T) {
         unsafe {
             self.ctx.device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::ALL, 0, bytemuck::bytes_of(data))

@@ -1,7 +1,6 @@
 //! Deferred direct lighting (compute): G-buffer + lights + shadow maps -> HDR radiance.
 
 use super::gbuffer::GBuffer;
-use crate::gpu::pipeline::group_count;
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline, Sampler};
 use crate::render::graph::{Pass, Use};
 use crate::render::FrameBuffers;
@@ -97,9 +96,9 @@ impl Pass for LightingPass {
             Use::overwrite(&self.radiance, Access::ComputeShaderWrite),
         ]
     }
-    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+    fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
         let e = self.radiance.extent2d();
         self.pipeline.bind(cmd, &[self.set.set]);
-        unsafe { ctx.device.cmd_dispatch(cmd, group_count(e.width, 8), group_count(e.height, 8), 1) };
+        self.pipeline.dispatch(cmd, [e.width, e.height, 1], [8, 8, 1]);
     }
 }

@@ -1,6 +1,5 @@
 //! Display transform (compute): radiance * 2^EV -> tone map -> sRGB 8-bit.
 
-use crate::gpu::pipeline::group_count;
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline};
 use crate::render::graph::{Pass, Use};
 use crate::render::FrameBuffers;
@@ -44,9 +43,9 @@ impl Pass for TonemapPass {
             Use::overwrite(&self.display, Access::ComputeShaderWrite),
         ]
     }
-    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+    fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
         let e = self.display.extent2d();
         self.pipeline.bind(cmd, &[self.set.set]);
-        unsafe { ctx.device.cmd_dispatch(cmd, group_count(e.width, 8), group_count(e.height, 8), 1) };
+        self.pipeline.dispatch(cmd, [e.width, e.height, 1], [8, 8, 1]);
     }
 }

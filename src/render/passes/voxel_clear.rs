@@ -1,7 +1,6 @@
 //! Voxel clears: every volume once before static voxelization (transfer), and before each
 //! dynamic update only the voxels not marked static (compute).
 
-use crate::gpu::pipeline::group_count;
 use crate::gpu::{shaders, Access, Context, DescriptorSet, GpuResult, Pipeline};
 use crate::render::graph::{Pass, Use};
 use crate::render::voxel::VoxelVolumes;
@@ -68,9 +67,9 @@ impl Pass for DynamicClearPass {
     fn uses(&self) -> Vec<Use<'_>> {
         self.volumes.uses(Access::ComputeShaderWrite, Access::ComputeShaderReadStorage)
     }
-    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
-        let g = group_count(self.volumes.grid.resolution, 4);
+    fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
+        let n = self.volumes.grid.resolution;
         self.pipeline.bind(cmd, &[self.set.set]);
-        unsafe { ctx.device.cmd_dispatch(cmd, g, g, g) };
+        self.pipeline.dispatch(cmd, [n; 3], [4; 3]);
     }
 }

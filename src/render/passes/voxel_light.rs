@@ -1,6 +1,5 @@
 //! Voxel illumination (compute): direct light (and emission) into the voxel radiance volume.
 
-use crate::gpu::pipeline::group_count;
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline, Sampler};
 use crate::render::graph::{Pass, Use};
 use crate::render::voxel::VoxelVolumes;
@@ -81,10 +80,10 @@ impl Pass for VoxelLightPass {
         uses.extend(v.emission.as_ref().map(|e| Use::image(e, Access::ComputeShaderReadStorage)));
         uses
     }
-    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
-        let g = group_count(self.volumes.grid.resolution, 4);
+    fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
+        let n = self.volumes.grid.resolution;
         self.pipeline.bind(cmd, &[self.set.set]);
         self.pipeline.push(cmd, &self.softness);
-        unsafe { ctx.device.cmd_dispatch(cmd, g, g, g) };
+        self.pipeline.dispatch(cmd, [n; 3], [4; 3]);
     }
 }

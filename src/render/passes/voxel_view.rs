@@ -1,7 +1,6 @@
 //! Debug view (`--view voxel-albedo|voxel-normal|voxel-emission`): ray-marches the voxel
 //! volume from the camera into the radiance image, in place of the lighting pass.
 
-use crate::gpu::pipeline::group_count;
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline};
 use crate::render::graph::{Pass, Use};
 use crate::render::voxel::VoxelVolumes;
@@ -77,9 +76,9 @@ impl Pass for VoxelViewPass {
             Use::overwrite(&self.radiance, Access::ComputeShaderWrite),
         ]
     }
-    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+    fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
         let e = self.radiance.extent2d();
         self.pipeline.bind(cmd, &[self.set.set]);
-        unsafe { ctx.device.cmd_dispatch(cmd, group_count(e.width, 8), group_count(e.height, 8), 1) };
+        self.pipeline.dispatch(cmd, [e.width, e.height, 1], [8, 8, 1]);
     }
 }
