@@ -1,12 +1,19 @@
 #version 460
-// Deferred direct lighting: for every pixel, emission plus the sum over lights of
-// BRDF * irradiance * cos * shadow visibility. Output: linear radiance W/(sr m^2).
+// Deferred lighting and composite: for every pixel, emission plus the sum over lights of
+// BRDF * irradiance * cos * shadow visibility (shadow maps, or the traced shadow cones), plus
+// with GI the indirect light: (albedo * diffuse-cone mean radiance + Ks * specular-cone
+// radiance) * AO. Output: linear radiance W/(sr m^2), or a debug view of the indirect light.
 #include "common.glsl"
 #include "brdf.glsl"
 #include "lights.glsl"
 #include "shadow.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(constant_id = 0) const bool GI = false;
+layout(constant_id = 1) const bool GI_SPECULAR = false;
+layout(constant_id = 2) const bool CONE_SHADOWS = false;
+layout(constant_id = 3) const uint OUTPUT = 0;  // 0 final, 1 indirect light only, 2 AO factor
 
 layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
@@ -18,6 +25,9 @@ layout(set = 0, binding = 6) uniform sampler2D g_specular;
 layout(set = 0, binding = 7) uniform sampler2D g_emission;
 layout(set = 0, binding = 8) uniform sampler2DArrayShadow shadow_map;
 layout(set = 0, binding = 9, rgba32f) uniform writeonly image2D out_radiance;
+layout(set = 0, binding = 10, rgba16f) uniform readonly image2D gi_diffuse;
+layout(set = 0, binding = 11, rgba16f) uniform readonly image2D gi_specular;
+layout(set = 0, binding = 12, rgba8) uniform readonly image2D gi_shadow;
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -26,7 +36,7 @@ void main() {
 
     float depth = texelFetch(g_depth, px, 0).r;
     if (depth >= 1.0) {
-        imageStore(out_radiance, px, vec4(0.0, 0.0, 0.0, 1.0));
+        imageStore(out_radiance, px, vec4(0.0, 0.0, 0.0, 1.0));  // background: black (AO view too)
         return;
     }
     vec2 ndc_xy = (vec2(px) + 0.5) / vec2(size) * 2.0 - 1.0;
@@ -39,6 +49,7 @@ void main() {
     vec3 V = safe_normalize(frame.camera_pos.xyz - P, N);
 
     vec3 radiance = texelFetch(g_emission, px, 0).rgb;
+    vec4 cone_vis = CONE_SHADOWS ? imageLoad(gi_shadow, px) : vec4(1.0);
     uint light_count = frame.counts.z;
     for (uint i = 0u; i < light_count; ++i) {
         Light l = lights[i];
@@ -48,7 +59,9 @@ void main() {
             continue;
         }
         float vis = 1.0;
-        if (l.shadow.x >= 0) {
+        if (CONE_SHADOWS && i < 4u) {
+            vis = cone_vis[i];
+        } else if (l.shadow.x >= 0) {
             int layer = shadow_view_index(l, P);
             vis = shadow_visibility(shadow_map, views[layer], layer, P, N, s.wi, s.distance,
                                     frame.shadow.x, frame.shadow.y, frame.shadow.z);
@@ -56,5 +69,15 @@ void main() {
         vec3 f = brdf_diffuse(albedo) + brdf_specular(ks, ns.a, N, V, s.wi);
         radiance += f * s.irradiance * cos_theta * vis;
     }
-    imageStore(out_radiance, px, vec4(radiance, 1.0));
+    vec3 indirect = vec3(0.0);
+    float ao = 1.0;
+    if (GI) {
+        vec4 d = imageLoad(gi_diffuse, px);
+        ao = clamp(d.a, 0.0, 1.0);
+        indirect = albedo * max(d.rgb, vec3(0.0));
+        if (GI_SPECULAR) indirect += ks * max(imageLoad(gi_specular, px).rgb, vec3(0.0));
+        indirect *= ao;
+    }
+    vec3 result = OUTPUT == 1u ? indirect : (OUTPUT == 2u ? vec3(ao) : radiance + indirect);
+    imageStore(out_radiance, px, vec4(result, 1.0));
 }

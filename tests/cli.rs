@@ -87,7 +87,7 @@ fn render_writes_png_and_exr() {
 
 #[test]
 fn info_reports_device_and_queue_topology() {
-    let o = dvsgi(&["info", "scenes/cornell-box.toml"], &[]);
+    let o = dvsgi(&["info", "scenes/cornell-box.toml", "--set", "gi.mode=\"none\""], &[]);
     let out = stdout(&o);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.contains("queue topology:"), "{out}");

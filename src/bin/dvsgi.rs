@@ -174,8 +174,9 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
         let before = ctx.allocated_bytes();
         let renderer = Renderer::new(&ctx, scene)?;
         println!("  passes (first frame): {}", renderer.pass_names(false).join(" -> "));
-        for (name, bytes) in renderer.images() {
-            println!("  volume {name}: {:.2} MiB", bytes as f64 / (1024.0 * 1024.0));
+        for img in renderer.images() {
+            let kind = if img.desc.kind == dvsgi::gpu::ImageKind::D3 { "volume" } else { "image" };
+            println!("  {kind} {}: {:.2} MiB", img.name, img.bytes as f64 / (1024.0 * 1024.0));
         }
         println!(
             "  GPU memory allocated for the scene and frame: {:.2} MiB",

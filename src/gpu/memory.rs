@@ -159,6 +159,8 @@ pub struct Image {
     pub view: vk::ImageView,
     /// One 2D view per array layer (D2Array only), for rendering into a layer.
     pub layer_views: Vec<vk::ImageView>,
+    /// One view per mip level (D3 with more than one level), for storage writes to a level.
+    pub level_views: Vec<vk::ImageView>,
     allocation: Option<Allocation>,
     pub desc: ImageDesc,
     pub name: String,
@@ -225,6 +227,7 @@ impl Image {
             raw,
             view: vk::ImageView::null(),
             layer_views: Vec::new(),
+            level_views: Vec::new(),
             allocation: None,
             desc,
             name: name.to_string(),
@@ -253,7 +256,20 @@ impl Image {
                 img.layer_views.push(v);
             }
         }
+        if desc.kind == ImageKind::D3 && desc.mip_levels > 1 {
+            for level in 0..desc.mip_levels {
+                let range = vk::ImageSubresourceRange { base_mip_level: level, level_count: 1, ..desc.full_range() };
+                let v = img.create_view(vk::ImageViewType::TYPE_3D, range)?;
+                ctx.name_object(v, &format!("{name} level {level}"));
+                img.level_views.push(v);
+            }
+        }
         Ok(img)
+    }
+
+    /// Edge length of mip `level` (3D images).
+    pub fn level_size(&self, level: u32) -> u32 {
+        (self.desc.extent.width >> level).max(1)
     }
 
     fn create_view(&self, ty: vk::ImageViewType, range: vk::ImageSubresourceRange) -> GpuResult<vk::ImageView> {
@@ -295,7 +311,7 @@ impl Image {
 impl Drop for Image {
     fn drop(&mut self) {
         unsafe {
-            for v in self.layer_views.drain(..) {
+            for v in self.layer_views.drain(..).chain(self.level_views.drain(..)) {
                 self.ctx.device.destroy_image_view(v, None);
             }
             if self.view != vk::ImageView::null() {

@@ -9,7 +9,7 @@ pub mod sync;
 
 pub use context::{Context, ContextDesc, QueueTopology};
 pub use error::{GpuError, GpuResult, VkContext};
-pub use memory::{Buffer, Image, ImageDesc, Sampler};
+pub use memory::{Buffer, Image, ImageDesc, ImageKind, Sampler};
 pub use pipeline::{Bind, DescriptorSet, GraphicsDesc, Pipeline};
 pub use sync::Access;
 

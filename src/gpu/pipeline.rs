@@ -15,6 +15,8 @@ pub enum Bind<'a> {
     /// Array of combined image samplers.
     SampledArray(Vec<vk::ImageView>, vk::Sampler, vk::ImageLayout),
     StorageImage(vk::ImageView),
+    /// Array of storage images (GENERAL layout).
+    StorageImageArray(Vec<vk::ImageView>),
 }
 
 impl Bind<'_> {
@@ -23,12 +25,13 @@ impl Bind<'_> {
             Bind::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
             Bind::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
             Bind::Sampled(..) | Bind::SampledArray(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-            Bind::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
+            Bind::StorageImage(_) | Bind::StorageImageArray(_) => vk::DescriptorType::STORAGE_IMAGE,
         }
     }
     fn count(&self) -> u32 {
         match self {
             Bind::SampledArray(v, ..) => v.len() as u32,
+            Bind::StorageImageArray(v) => v.len() as u32,
             _ => 1,
         }
     }
@@ -115,6 +118,16 @@ impl DescriptorSet {
                     image_view: *view,
                     image_layout: vk::ImageLayout::GENERAL,
                 }]),
+                Bind::StorageImageArray(views) => image_infos.push(
+                    views
+                        .iter()
+                        .map(|v| vk::DescriptorImageInfo {
+                            sampler: vk::Sampler::null(),
+                            image_view: *v,
+                            image_layout: vk::ImageLayout::GENERAL,
+                        })
+                        .collect(),
+                ),
             }
         }
         let (mut bi, mut ii) = (0, 0);

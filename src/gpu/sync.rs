@@ -196,6 +196,15 @@ impl Barrier {
             .image(image)
             .subresource_range(range)
     }
+    /// A global memory barrier (no layout change): between dependent dispatches inside one
+    /// pass, e.g. the levels of a mip chain.
+    pub fn memory(&self) -> vk::MemoryBarrier2<'static> {
+        vk::MemoryBarrier2::default()
+            .src_stage_mask(self.src_stage)
+            .src_access_mask(self.src_access)
+            .dst_stage_mask(self.dst_stage)
+            .dst_access_mask(self.dst_access)
+    }
     pub fn buffer(&self, buffer: vk::Buffer) -> vk::BufferMemoryBarrier2<'static> {
         vk::BufferMemoryBarrier2::default()
             .src_stage_mask(self.src_stage)

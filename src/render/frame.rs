@@ -3,19 +3,22 @@
 
 use super::graph::Pass;
 use super::passes::gbuffer::{GBuffer, GBufferPass};
-use super::passes::lighting::LightingPass;
+use super::passes::gi_trace::{GiPlaceholders, GiTargets, GiTracePass, GiUpsamplePass};
+use super::passes::lighting::{GiInputs, LightingOutput, LightingPass};
 use super::passes::readback::ReadbackPasses;
 use super::passes::shadow::ShadowPass;
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
+use super::passes::voxel_bounce::VoxelBouncePass;
 use super::passes::voxel_clear::{DynamicClearPass, VoxelClearPass};
 use super::passes::voxel_light::VoxelLightPass;
-use super::passes::voxel_view::VoxelViewPass;
+use super::passes::voxel_mips::{VoxelMipPass, VoxelMips};
+use super::passes::voxel_view::{VoxelMipViewPass, VoxelViewPass};
 use super::passes::voxelize::{VoxelizePass, Voxelizer};
 use super::scene_gpu::SceneGpu;
 use super::voxel::VoxelVolumes;
 use super::FrameBuffers;
 use crate::gpu::{Context, GpuResult, Image, ImageDesc};
-use crate::scene::{GiMode, Scene, View};
+use crate::scene::{DirectShadows, GiMode, Scene, View};
 use ash::vk;
 use std::sync::Arc;
 
@@ -27,20 +30,47 @@ pub struct VoxelPasses {
     /// Only with dynamic objects.
     pub dynamic: Option<(DynamicClearPass, VoxelizePass)>,
     pub light: VoxelLightPass,
+    /// Directional mips of the direct radiance; only when cones are traced.
+    pub mips: Option<VoxelMipPass>,
+    /// The distinct bounce steps, each a bounce and the mips of its result: direct -> a,
+    /// a -> b, b -> a (as many as the bounce count needs). Bounce i runs step
+    /// [`bounce_step`]`(i)`.
+    pub bounces: Vec<(VoxelBouncePass, VoxelMipPass)>,
+    /// Light bounces per update.
+    pub bounce_count: u32,
+}
+
+/// The step that performs bounce `i` (see [`VoxelPasses::bounces`]).
+pub fn bounce_step(i: u32) -> usize {
+    match i {
+        0 => 0,
+        i if i % 2 == 1 => 1,
+        _ => 2,
+    }
+}
+
+/// Per-pixel cone tracing (and the upsample when tracing at reduced resolution).
+pub struct ConePasses {
+    pub trace: GiTracePass,
+    /// Only with `gi.downsample` > 1.
+    pub upsample: Option<GiUpsamplePass>,
 }
 
 /// How the frame shades pixels.
 pub enum Shading {
     Lighting(LightingPass),
     VoxelView(VoxelViewPass),
+    MipView(VoxelMipViewPass),
 }
 
 /// Every pass the scene needs, created once.
 pub struct FramePasses {
     pub voxels: Option<VoxelPasses>,
-    /// Only when at least one light casts shadows.
+    /// Only when some light casts shadows that are resolved with shadow maps.
     pub shadow: Option<ShadowPass>,
     pub gbuffer: GBufferPass,
+    /// Only when the shading uses cone-traced light.
+    pub cones: Option<ConePasses>,
     pub shading: Shading,
     pub tonemap: TonemapPass,
     /// Created on the first frame whose output is read back (not for benchmarks).
@@ -52,6 +82,10 @@ pub struct FramePasses {
 pub struct FrameState {
     /// Static geometry is already voxelized.
     pub static_voxelized: bool,
+    /// Revoxelize dynamic objects this frame (the update policy says so).
+    pub revoxelize: bool,
+    /// Relight the voxels (and rebuild mips and bounces) this frame.
+    pub relight: bool,
     /// Copy the outputs for the host.
     pub readback: bool,
 }
@@ -93,7 +127,7 @@ impl FramePasses {
         };
         let radiance = image2d("radiance", RADIANCE_FORMAT)?;
         let display = image2d("display", DISPLAY_FORMAT)?;
-        let voxel_view = s.view != View::Final;
+        let voxel_view = !matches!(s.view, View::Final | View::Indirect | View::Ao);
         let voxels = if s.gi.mode == GiMode::Vct || voxel_view {
             let volumes = Arc::new(VoxelVolumes::new(ctx, scene)?);
             let voxelizer = Voxelizer::new(ctx, scene_gpu, frame, &volumes)?;
@@ -102,19 +136,90 @@ impl FramePasses {
             } else {
                 None
             };
+            let (mips, bounces) = if volumes.needs.cones {
+                let shared = VoxelMips::new(ctx, &volumes)?;
+                let n = volumes.needs.bounces;
+                let steps = (0..n.min(3))
+                    .map(|i| {
+                        let (src, dst) = volumes.bounce_volumes(i);
+                        Ok((
+                            VoxelBouncePass::new(ctx, &volumes, src, dst)?,
+                            VoxelMipPass::new(ctx, &shared, &volumes, dst)?,
+                        ))
+                    })
+                    .collect::<GpuResult<Vec<_>>>()?;
+                (Some(VoxelMipPass::new(ctx, &shared, &volumes, &volumes.radiance)?), steps)
+            } else {
+                (None, Vec::new())
+            };
             Some(VoxelPasses {
                 light: VoxelLightPass::new(ctx, frame, &volumes, &atlas, &s.gi)?,
                 clear: VoxelClearPass::new(&volumes),
                 voxelize_static: VoxelizePass::new(&voxelizer, false),
                 dynamic,
+                mips,
+                bounce_count: volumes.needs.bounces,
+                bounces,
                 volumes,
             })
         } else {
             None
         };
-        let shading = match (&voxels, voxel_view) {
-            (Some(v), true) => Shading::VoxelView(VoxelViewPass::new(ctx, frame, &v.volumes, s.view, &radiance)?),
-            _ => Shading::Lighting(LightingPass::new(ctx, frame, &gbuffer, &atlas, &radiance)?),
+        let placeholders = Arc::new(GiPlaceholders::new(ctx)?);
+        let cones = match &voxels {
+            Some(v) if v.volumes.needs.cones && !voxel_view => {
+                let specular = s.gi.specular && scene.materials.iter().any(|m| m.specular.max_element() > 0.0);
+                let cone_shadows = cone_shadows(scene);
+                let k = s.gi.downsample;
+                let (lw, lh) = (width.div_ceil(k), height.div_ceil(k));
+                let label = if k > 1 { format!(" (1/{k})") } else { String::new() };
+                let low = GiTargets::new(ctx, &label, lw, lh, specular, cone_shadows)?;
+                let upsample = if k > 1 {
+                    let full = GiTargets::new(ctx, "", width, height, specular, cone_shadows)?;
+                    Some(GiUpsamplePass::new(ctx, frame, &gbuffer, &v.volumes, &low, full, &placeholders)?)
+                } else {
+                    None
+                };
+                Some(ConePasses {
+                    trace: GiTracePass::new(ctx, frame, &gbuffer, &v.volumes, low, &placeholders)?,
+                    upsample,
+                })
+            }
+            _ => None,
+        };
+        let shading = match (&voxels, s.view) {
+            (Some(v), View::VoxelMip) => Shading::MipView(VoxelMipViewPass::new(
+                ctx,
+                frame,
+                &v.volumes,
+                s.view_lod,
+                s.view_direction,
+                &radiance,
+            )?),
+            (Some(v), _) if voxel_view => {
+                Shading::VoxelView(VoxelViewPass::new(ctx, frame, &v.volumes, s.view, &radiance)?)
+            }
+            _ => {
+                let gi = cones.as_ref().map(|c| GiInputs {
+                    targets: c.upsample.as_ref().map(|u| &u.targets).unwrap_or(&c.trace.targets),
+                    cone_shadows: c.trace.targets.shadow.is_some(),
+                });
+                let output = match s.view {
+                    View::Indirect => LightingOutput::IndirectOnly,
+                    View::Ao => LightingOutput::AmbientOcclusion,
+                    _ => LightingOutput::Final,
+                };
+                Shading::Lighting(LightingPass::new(
+                    ctx,
+                    frame,
+                    &gbuffer,
+                    &atlas,
+                    &radiance,
+                    gi,
+                    &placeholders,
+                    output,
+                )?)
+            }
         };
         let shadow =
             if shadow_views > 0 { Some(ShadowPass::new(ctx, scene_gpu, frame, &atlas, shadow_views)?) } else { None };
@@ -122,10 +227,24 @@ impl FramePasses {
             voxels,
             shadow,
             gbuffer: GBufferPass::new(ctx, scene_gpu, frame, &gbuffer)?,
+            cones,
             shading,
             tonemap: TonemapPass::new(ctx, frame, &radiance, &display)?,
             readback: None,
         })
+    }
+
+    /// The voxel volumes and the cone tracer's targets that exist.
+    pub fn gi_images(&self) -> Vec<&Arc<Image>> {
+        let mut out = Vec::new();
+        if let Some(v) = &self.voxels {
+            out.extend(v.volumes.all());
+        }
+        if let Some(c) = &self.cones {
+            out.extend(c.trace.targets.all());
+            out.extend(c.upsample.iter().flat_map(|u| u.targets.all()));
+        }
+        out
     }
 
     /// Create the readback passes if they do not exist yet.
@@ -134,6 +253,7 @@ impl FramePasses {
             let radiance = match &self.shading {
                 Shading::Lighting(l) => l.radiance.clone(),
                 Shading::VoxelView(v) => v.radiance.clone(),
+                Shading::MipView(v) => v.radiance.clone(),
             };
             self.readback = Some(ReadbackPasses::new(ctx, &radiance, &self.tonemap.display)?);
         }
@@ -148,30 +268,47 @@ impl FramePasses {
                 passes.push(&v.clear);
                 passes.push(&v.voxelize_static);
             }
-            if let Some((clear, voxelize)) = &v.dynamic {
+            if let (true, Some((clear, voxelize))) = (state.revoxelize || !state.static_voxelized, &v.dynamic) {
                 passes.push(clear);
                 passes.push(voxelize);
             }
         }
         let lit_voxels = match &self.shading {
-            Shading::Lighting(_) => true,
+            Shading::Lighting(_) | Shading::MipView(_) => true,
             Shading::VoxelView(view) => view.shows_radiance(),
         };
-        if lit_voxels {
-            if let Some(shadow) = &self.shadow {
+        let relight = lit_voxels && (state.relight || !state.static_voxelized);
+        let direct_needs_shadow_maps = matches!(&self.shading, Shading::Lighting(_));
+        if let Some(shadow) = &self.shadow {
+            if relight || direct_needs_shadow_maps {
                 passes.push(shadow);
             }
-            if let Some(v) = &self.voxels {
-                passes.push(&v.light);
+        }
+        if let (true, Some(v)) = (relight, &self.voxels) {
+            passes.push(&v.light);
+            if let Some(mips) = &v.mips {
+                passes.push(mips);
+            }
+            for i in 0..v.bounce_count {
+                let (bounce, mips) = &v.bounces[bounce_step(i)];
+                passes.push(bounce);
+                passes.push(mips);
             }
         }
         match &self.shading {
             Shading::Lighting(lighting) => {
                 passes.push(&self.gbuffer);
+                if let Some(c) = &self.cones {
+                    passes.push(&c.trace);
+                    if let Some(up) = &c.upsample {
+                        passes.push(up);
+                    }
+                }
                 passes.push(lighting);
             }
             // A voxel view needs no G-buffer.
             Shading::VoxelView(view) => passes.push(view),
+            Shading::MipView(view) => passes.push(view),
         }
         passes.push(&self.tonemap);
         if let (true, Some(r)) = (state.readback, &self.readback) {
@@ -181,4 +318,12 @@ impl FramePasses {
         }
         passes
     }
+}
+
+/// Direct light is shadowed by cones (`gi.shadows = "cone"`, cones traced per pixel).
+pub fn cone_shadows(scene: &Scene) -> bool {
+    let s = &scene.settings;
+    s.gi.mode == GiMode::Vct
+        && s.gi.shadows == DirectShadows::Cone
+        && matches!(s.view, View::Final | View::Indirect | View::Ao)
 }

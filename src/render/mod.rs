@@ -1,6 +1,7 @@
 //! The renderer: scene upload, per-frame data, and frame submission. What a frame runs is in
 //! [`frame`]; how barriers are derived is in [`graph`].
 
+pub mod cones;
 pub mod frame;
 pub mod graph;
 pub mod lights;
@@ -9,7 +10,7 @@ pub mod scene_gpu;
 pub mod voxel;
 
 use crate::gpu::{Buffer, Context, GpuError, GpuResult, VkContext};
-use crate::scene::{Scene, ToneMap};
+use crate::scene::{GiMode, Scene, ToneMap, View, VoxelOcclusion};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use frame::{FramePasses, FrameState};
@@ -79,6 +80,14 @@ pub struct Renderer {
     height: u32,
     /// Static geometry has been voxelized (by a completed frame).
     static_voxelized: bool,
+    /// Frames rendered so far (for the voxel update policy).
+    frame_index: u64,
+    /// The voxels are updated on the next frame whatever the policy says.
+    update_requested: bool,
+    /// The lights as last written, to relight the voxels when they change.
+    last_lights: Vec<u8>,
+    /// Whether the next frame relights (lights changed since the last relight).
+    lights_changed: bool,
     /// Barriers of the last recorded frame, described (for `--verbose` and tests).
     pub last_barriers: Vec<String>,
 }
@@ -124,8 +133,14 @@ impl Renderer {
                 MemoryLocation::CpuToGpu,
             )?,
         };
-        let passes = FramePasses::new(ctx, &scene, &scene_gpu, &frame_buffers, shadow_views)?;
-        let timer = PassTimer::new(ctx, 16)?;
+        // Shadow maps only where something samples them: direct light (unless cones shadow
+        // every shadowed light) or voxel lighting with shadow-map occlusion.
+        let voxel_lighting = s.gi.mode == GiMode::Vct || matches!(s.view, View::VoxelRadiance | View::VoxelMip);
+        let direct_maps = !frame::cone_shadows(&scene) || scene.lights.len() > 4;
+        let voxel_maps = voxel_lighting && s.gi.occlusion == VoxelOcclusion::ShadowMap;
+        let map_views = if direct_maps || voxel_maps { shadow_views } else { 0 };
+        let passes = FramePasses::new(ctx, &scene, &scene_gpu, &frame_buffers, map_views)?;
+        let timer = PassTimer::new(ctx, 128)?;
         let d = &ctx.device;
         let pool = unsafe {
             d.create_command_pool(
@@ -151,6 +166,10 @@ impl Renderer {
             width,
             height,
             static_voxelized: false,
+            frame_index: 0,
+            update_requested: false,
+            last_lights: Vec::new(),
+            lights_changed: true,
             last_barriers: Vec::new(),
         };
         me.cmd = unsafe {
@@ -178,7 +197,21 @@ impl Renderer {
     }
 
     fn frame_state(&self, readback: bool) -> FrameState {
-        FrameState { static_voxelized: self.static_voxelized, readback }
+        // The update policy: every `update_interval` frames (0: only on request).
+        let interval = self.scene.settings.gi.update_interval as u64;
+        let due = self.update_requested || (interval > 0 && self.frame_index % interval == 0);
+        FrameState {
+            static_voxelized: self.static_voxelized,
+            revoxelize: due,
+            relight: due || self.lights_changed,
+            readback,
+        }
+    }
+
+    /// Update the voxels (revoxelize dynamic objects, relight, bounces) on the next frame,
+    /// whatever `gi.update_interval` says.
+    pub fn request_voxel_update(&mut self) {
+        self.update_requested = true;
     }
 
     /// The voxel volumes, when the scene has them.
@@ -186,15 +219,9 @@ impl Renderer {
         self.passes.voxels.as_ref().map(|v| &*v.volumes)
     }
 
-    /// Every GPU image the frame uses with its size in bytes (for `info` and tests).
-    pub fn images(&self) -> Vec<(String, u64)> {
-        let mut out = Vec::new();
-        if let Some(v) = self.voxels() {
-            for img in v.all() {
-                out.push((img.name.clone(), img.bytes));
-            }
-        }
-        out
+    /// The voxel volumes and cone-tracing targets this scene created (for `info` and tests).
+    pub fn images(&self) -> Vec<Arc<crate::gpu::Image>> {
+        self.passes.gi_images().into_iter().cloned().collect()
     }
 
     /// Copy an image of this renderer to the host (waits; for tests and debugging).
@@ -208,7 +235,7 @@ impl Renderer {
     }
 
     /// Write the per-frame data for scene time `t`.
-    fn update(&self, t: f32) {
+    fn update(&mut self, t: f32) {
         let s = &self.scene.settings;
         let cam = &self.scene.camera;
         let view = cam.view();
@@ -234,6 +261,11 @@ impl Renderer {
         if !lights.is_empty() {
             self.frame_buffers.lights.write_pod(&lights);
         }
+        let bytes: &[u8] = bytemuck::cast_slice(&lights);
+        if bytes != self.last_lights.as_slice() {
+            self.lights_changed = true;
+            self.last_lights = bytes.to_vec();
+        }
         if !views.is_empty() {
             self.frame_buffers.shadow_views.write_pod(&views);
         }
@@ -254,6 +286,11 @@ impl Renderer {
         if self.passes.voxels.is_some() {
             self.static_voxelized = true;
         }
+        if state.relight {
+            self.lights_changed = false;
+        }
+        self.update_requested = false;
+        self.frame_index += 1;
         let host_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(FrameStats { host_ms, passes: self.timer.read()? })
     }

@@ -2,9 +2,10 @@
 //! given, otherwise the world bounds at the scene time grown by 5% (so surfaces on the scene's
 //! boundary are not on the grid's faces). Volumes are created only when the scene needs them.
 
-use crate::gpu::{Access, Bind, Buffer, Context, GpuError, GpuResult, Image, ImageDesc};
+use crate::gpu::{Access, Bind, Buffer, Context, GpuError, GpuResult, Image, ImageDesc, Sampler};
+use crate::render::cones::GpuGiParams;
 use crate::render::graph::Use;
-use crate::scene::{Aabb, Scene};
+use crate::scene::{Aabb, GiMode, Scene, View};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -58,13 +59,26 @@ pub struct VoxelNeeds {
     pub emission: bool,
     /// Some object is dynamic: a static-flag volume, a dynamic clear and a dynamic pass.
     pub dynamic: bool,
+    /// Cones are traced (final image with `vct`, GI views, the mip view): the six directional
+    /// volumes.
+    pub cones: bool,
+    /// Light bounces in the voxels (0 without cones).
+    pub bounces: u32,
 }
 
 impl VoxelNeeds {
     pub fn of(scene: &Scene) -> VoxelNeeds {
+        let s = &scene.settings;
+        let cones = match s.view {
+            View::Final | View::Indirect | View::Ao => s.gi.mode == GiMode::Vct,
+            View::VoxelMip => true,
+            View::VoxelAlbedo | View::VoxelNormal | View::VoxelEmission | View::VoxelRadiance => false,
+        };
         VoxelNeeds {
             emission: scene.materials.iter().any(|m| m.is_emissive()),
             dynamic: scene.objects.iter().any(|o| o.dynamic),
+            cones,
+            bounces: if cones { s.gi.bounces } else { 0 },
         }
     }
 }
@@ -80,8 +94,17 @@ pub struct VoxelVolumes {
     pub emission: Option<Arc<Image>>,
     /// Only with dynamic objects: 1 where static geometry was voxelized (R8_UINT).
     pub flags: Option<Arc<Image>>,
-    /// Outgoing radiance of the lit voxels (RGBA16F, alpha = occupancy).
+    /// Outgoing radiance of the lit voxels, direct light and emission (RGBA16F, alpha = occupancy).
     pub radiance: Arc<Image>,
+    /// Radiance after each bounce, ping-ponged (none without bounces, one for a single bounce).
+    pub bounced: Vec<Arc<Image>>,
+    /// The six directional volumes (+x, -x, +y, -y, +z, -z) at half resolution with full mip
+    /// chains, built from the final radiance; only when cones are traced.
+    pub directional: Vec<Arc<Image>>,
+    /// Cone-tracing parameters (`GiParams` in cone_params.glsl).
+    pub gi_params: Buffer,
+    /// Trilinear, mipmapped, transparent black outside the grid.
+    pub sampler: Sampler,
     /// Bound in place of `flags` when there is none (a 1-voxel volume).
     pub flags_placeholder: Option<Arc<Image>>,
     /// Emitted radiance that maps to 255 in the emission volume.
@@ -102,6 +125,52 @@ impl VoxelVolumes {
         let usage =
             vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC;
         let volume = |name: &str, format| Image::new(ctx, name, ImageDesc::d3(format, res, 1, usage)).map(Arc::new);
+        let sampled = usage | vk::ImageUsageFlags::SAMPLED;
+        let mip_levels = res.trailing_zeros(); // half resolution down to 1 voxel
+        let directional = if needs.cones {
+            ["+x", "-x", "+y", "-y", "+z", "-z"]
+                .iter()
+                .map(|d| {
+                    Image::new(
+                        ctx,
+                        &format!("voxel radiance {d}"),
+                        ImageDesc::d3(RADIANCE_VOLUME_FORMAT, res / 2, mip_levels, sampled),
+                    )
+                    .map(Arc::new)
+                })
+                .collect::<GpuResult<Vec<_>>>()?
+        } else {
+            Vec::new()
+        };
+        let bounced = (0..needs.bounces.min(2))
+            .map(|i| {
+                Image::new(ctx, &format!("voxel radiance bounce {}", ["a", "b"][i as usize]), {
+                    ImageDesc::d3(RADIANCE_VOLUME_FORMAT, res, 1, sampled)
+                })
+                .map(Arc::new)
+            })
+            .collect::<GpuResult<Vec<_>>>()?;
+        let gi_params = Buffer::new(
+            ctx,
+            "gi params",
+            std::mem::size_of::<GpuGiParams>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+        gi_params.write_pod(&[GpuGiParams::new(&scene.settings.gi, res, grid.voxel_size, mip_levels)]);
+        let sampler = Sampler::new(
+            ctx,
+            "voxel volume sampler",
+            &vk::SamplerCreateInfo::default()
+                .mag_filter(vk::Filter::LINEAR)
+                .min_filter(vk::Filter::LINEAR)
+                .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_BORDER)
+                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_BORDER)
+                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_BORDER)
+                .border_color(vk::BorderColor::FLOAT_TRANSPARENT_BLACK)
+                .max_lod(mip_levels as f32),
+        )?;
         let emission_scale = scene.materials.iter().map(|m| m.emission.max_element()).fold(0.0f32, f32::max).max(1e-6);
         let grid_buffer = Buffer::new(
             ctx,
@@ -120,7 +189,12 @@ impl VoxelVolumes {
             needs,
             grid_buffer,
             albedo: volume("voxel albedo", vk::Format::R32_UINT)?,
-            radiance: volume("voxel radiance", RADIANCE_VOLUME_FORMAT)?,
+            radiance: Image::new(ctx, "voxel radiance", ImageDesc::d3(RADIANCE_VOLUME_FORMAT, res, 1, sampled))
+                .map(Arc::new)?,
+            bounced,
+            directional,
+            gi_params,
+            sampler,
             normal: volume("voxel normal", vk::Format::R32_UINT)?,
             emission: needs.emission.then(|| volume("voxel emission", vk::Format::R32_UINT)).transpose()?,
             flags: needs.dynamic.then(|| volume("voxel static flags", vk::Format::R8_UINT)).transpose()?,
@@ -140,7 +214,24 @@ impl VoxelVolumes {
         v.extend(self.emission.as_ref());
         v.extend(self.flags.as_ref());
         v.push(&self.radiance);
+        v.extend(self.bounced.iter());
+        v.extend(self.directional.iter());
         v
+    }
+
+    /// The radiance volume after the last bounce (the one the directional volumes are built
+    /// from and the tracer samples at full resolution).
+    pub fn final_radiance(&self) -> &Arc<Image> {
+        match self.needs.bounces {
+            0 => &self.radiance,
+            n => &self.bounced[((n - 1) % 2) as usize],
+        }
+    }
+
+    /// Bounce `i` (0-based): (volume it samples, volume it writes).
+    pub fn bounce_volumes(&self, i: u32) -> (&Arc<Image>, &Arc<Image>) {
+        let src = if i == 0 { &self.radiance } else { &self.bounced[((i - 1) % 2) as usize] };
+        (src, &self.bounced[(i % 2) as usize])
     }
 
     /// Uses of the averaged volumes (albedo, normal, emission) by a pass that writes them with

@@ -102,30 +102,12 @@ pub(crate) struct RenderDef {
     pub shadow_filter_radius: f32,
     pub shadow_normal_bias: f32,
     pub view: View,
+    pub view_lod: f32,
+    pub view_direction: ViewDirection,
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub(crate) struct GiDef {
-    pub mode: GiMode,
-    pub voxel_resolution: u32,
-    pub attenuation: VoxelAttenuation,
-    pub occlusion: VoxelOcclusion,
-    pub voxel_shadow_softness: f32,
-}
-
-impl Default for GiDef {
-    fn default() -> Self {
-        let d = GiSettings::default();
-        GiDef {
-            mode: d.mode,
-            voxel_resolution: d.voxel_resolution,
-            attenuation: d.attenuation,
-            occlusion: d.occlusion,
-            voxel_shadow_softness: d.voxel_shadow_softness,
-        }
-    }
-}
+/// The `[gi]` table is [`GiSettings`] itself.
+pub(crate) type GiDef = GiSettings;
 
 impl Default for RenderDef {
     fn default() -> Self {
@@ -140,6 +122,8 @@ impl Default for RenderDef {
             shadow_filter_radius: d.shadow_filter_radius,
             shadow_normal_bias: d.shadow_normal_bias,
             view: d.view,
+            view_lod: d.view_lod,
+            view_direction: d.view_direction,
         }
     }
 }
@@ -311,7 +295,26 @@ pub(crate) struct LightDef {
 // The keys of each table, for `--set` (keys that are optional may be absent from the
 // serialized tree but can still be set). A unit test checks these against the structs.
 pub(crate) const TOP_KEYS: &[&str] = &["scene", "camera", "render", "gi", "materials", "objects", "lights"];
-pub(crate) const GI_KEYS: &[&str] = &["mode", "voxel_resolution", "attenuation", "occlusion", "voxel_shadow_softness"];
+pub(crate) const GI_KEYS: &[&str] = &[
+    "mode",
+    "voxel_resolution",
+    "attenuation",
+    "occlusion",
+    "voxel_shadow_softness",
+    "bounces",
+    "diffuse_cones",
+    "diffuse_cone_angle",
+    "specular",
+    "ao",
+    "ao_falloff",
+    "shadows",
+    "shadow_cone_angle",
+    "step",
+    "max_distance",
+    "start_offset",
+    "downsample",
+    "update_interval",
+];
 pub(crate) const SCENE_KEYS: &[&str] = &["name", "search_paths", "bounds"];
 pub(crate) const BOUNDS_KEYS: &[&str] = &["min", "max"];
 pub(crate) const CAMERA_KEYS: &[&str] = &["position", "target", "up", "fov_y", "near", "far"];
@@ -325,6 +328,8 @@ pub(crate) const RENDER_KEYS: &[&str] = &[
     "shadow_filter_radius",
     "shadow_normal_bias",
     "view",
+    "view_lod",
+    "view_direction",
 ];
 pub(crate) const MATERIAL_KEYS: &[&str] = &["name", "albedo", "specular", "shininess", "emission", "albedo_texture"];
 pub(crate) const OBJECT_KEYS: &[&str] =
@@ -718,20 +723,13 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         shadow_filter_radius: ctx.scalar("render.shadow_filter_radius", r.shadow_filter_radius)?,
         shadow_normal_bias: ctx.scalar("render.shadow_normal_bias", r.shadow_normal_bias)?,
         view: r.view,
-        gi: GiSettings {
-            mode: file.gi.mode,
-            voxel_resolution: file.gi.voxel_resolution,
-            attenuation: file.gi.attenuation,
-            occlusion: file.gi.occlusion,
-            voxel_shadow_softness: ctx.scalar("gi.voxel_shadow_softness", file.gi.voxel_shadow_softness)?,
-        },
+        view_lod: ctx.scalar("render.view_lod", r.view_lod)?,
+        view_direction: r.view_direction,
+        gi: file.gi.clone(),
     };
-    if settings.gi.voxel_shadow_softness < 0.0 {
-        return Err(ctx.invalid("gi.voxel_shadow_softness", "must be >= 0"));
-    }
-    let res = settings.gi.voxel_resolution;
-    if !(8..=512).contains(&res) || !res.is_power_of_two() {
-        return Err(ctx.invalid("gi.voxel_resolution", format!("{res} is not a power of two in 8..=512")));
+    settings.gi.validate().map_err(|(key, message)| ctx.invalid(format!("gi.{key}"), message))?;
+    if !(0.0..=16.0).contains(&settings.view_lod) {
+        return Err(ctx.invalid("render.view_lod", format!("{} is not in 0..=16", settings.view_lod)));
     }
     if settings.shadow_filter_radius < 0.0 {
         return Err(ctx.invalid("render.shadow_filter_radius", "must be >= 0"));

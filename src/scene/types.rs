@@ -305,6 +305,14 @@ pub enum View {
     VoxelEmission,
     /// The lit voxels' outgoing radiance.
     VoxelRadiance,
+    /// The radiance volumes as the cone tracer samples them, at `render.view_lod` (0 = full
+    /// resolution, 1 = the directional volumes' level 0, fractional values blend) and
+    /// `render.view_direction`, composited front to back along each camera ray.
+    VoxelMip,
+    /// The indirect light only (diffuse x albedo + specular), after AO.
+    Indirect,
+    /// The ambient occlusion factor as grey.
+    Ao,
 }
 
 /// How voxel lighting attenuates light by the voxel's (averaged) normal.
@@ -327,8 +335,43 @@ pub enum VoxelOcclusion {
     Raymarch,
 }
 
-/// Voxel global illumination settings (the `[gi]` table).
-#[derive(Debug, Clone, PartialEq)]
+/// How direct light is shadowed in the final image.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DirectShadows {
+    /// Shadow maps with PCF.
+    ShadowMap,
+    /// A cone traced through the voxels toward each light (soft; `shadow_cone_angle`); at most
+    /// four shadow-casting lights.
+    Cone,
+}
+
+/// Direction shown by the `voxel-mip` view.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum ViewDirection {
+    /// Each camera ray samples the directional volumes along its own direction.
+    #[serde(rename = "ray")]
+    Ray,
+    #[serde(rename = "+x")]
+    PosX,
+    #[serde(rename = "-x")]
+    NegX,
+    #[serde(rename = "+y")]
+    PosY,
+    #[serde(rename = "-y")]
+    NegY,
+    #[serde(rename = "+z")]
+    PosZ,
+    #[serde(rename = "-z")]
+    NegZ,
+}
+
+/// The diffuse cone counts with a built-in cone set.
+pub const DIFFUSE_CONE_COUNTS: [u32; 5] = [1, 4, 6, 9, 16];
+
+/// Voxel global illumination settings (the `[gi]` table). Validated by [`GiSettings::validate`].
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct GiSettings {
     pub mode: GiMode,
     /// Voxels along each side of the cubic grid: a power of two in 8..=512.
@@ -337,17 +380,109 @@ pub struct GiSettings {
     pub occlusion: VoxelOcclusion,
     /// Ray-marched shadows only: 0 = hard; larger values soften with distance (nu accumulation).
     pub voxel_shadow_softness: f32,
+    /// Extra light bounces by per-voxel cone tracing (0 = direct light in the voxels only).
+    pub bounces: u32,
+    /// Diffuse cones per pixel (and per voxel in bounces): one of [`DIFFUSE_CONE_COUNTS`].
+    pub diffuse_cones: u32,
+    /// Full aperture of each diffuse cone in degrees; 0 = automatic (each cone spans the solid
+    /// angle of its share of the hemisphere).
+    pub diffuse_cone_angle: f32,
+    /// Trace a specular cone (only where some material has a specular colour).
+    pub specular: bool,
+    /// Ambient occlusion from the diffuse cones, weighted by f(r) = 1 / (1 + falloff r) with r
+    /// in units of the voxel grid's side; multiplies the indirect light.
+    pub ao: bool,
+    pub ao_falloff: f32,
+    /// How direct light is shadowed.
+    pub shadows: DirectShadows,
+    /// Full aperture of the shadow cones in degrees.
+    pub shadow_cone_angle: f32,
+    /// Step along a cone as a fraction of its diameter (beta).
+    pub step: f32,
+    /// Longest cone in world units; 0 = the grid's diagonal.
+    pub max_distance: f32,
+    /// Cones start this many voxels off the surface along its normal (against self-illumination).
+    pub start_offset: f32,
+    /// Trace at 1/downsample of the image resolution, then upsample (depth- and normal-aware).
+    pub downsample: u32,
+    /// Revoxelize dynamic objects every N frames; 0 = only on demand (`Renderer::request_voxel_update`).
+    pub update_interval: u32,
 }
 
 impl Default for GiSettings {
     fn default() -> Self {
         GiSettings {
-            mode: GiMode::None,
+            mode: GiMode::Vct,
             voxel_resolution: 128,
             attenuation: VoxelAttenuation::NormalWeighted,
             occlusion: VoxelOcclusion::ShadowMap,
             voxel_shadow_softness: 0.0,
+            bounces: 1,
+            diffuse_cones: 6,
+            diffuse_cone_angle: 0.0,
+            specular: true,
+            ao: true,
+            ao_falloff: 4.0,
+            shadows: DirectShadows::ShadowMap,
+            shadow_cone_angle: 6.0,
+            step: 0.5,
+            max_distance: 0.0,
+            start_offset: 1.5,
+            downsample: 1,
+            update_interval: 1,
         }
+    }
+}
+
+impl GiSettings {
+    /// Check ranges; `Err((key, message))` names the first bad key (without the `gi.` prefix).
+    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+        let finite = [
+            ("voxel_shadow_softness", self.voxel_shadow_softness),
+            ("diffuse_cone_angle", self.diffuse_cone_angle),
+            ("ao_falloff", self.ao_falloff),
+            ("shadow_cone_angle", self.shadow_cone_angle),
+            ("step", self.step),
+            ("max_distance", self.max_distance),
+            ("start_offset", self.start_offset),
+        ];
+        for (key, v) in finite {
+            if !v.is_finite() {
+                return Err((key, format!("{v} is not finite")));
+            }
+            if v < 0.0 {
+                return Err((key, format!("{v} must be >= 0")));
+            }
+        }
+        let res = self.voxel_resolution;
+        if !(8..=512).contains(&res) || !res.is_power_of_two() {
+            return Err(("voxel_resolution", format!("{res} is not a power of two in 8..=512")));
+        }
+        if self.bounces > 16 {
+            return Err(("bounces", format!("{} is not in 0..=16", self.bounces)));
+        }
+        if !DIFFUSE_CONE_COUNTS.contains(&self.diffuse_cones) {
+            return Err(("diffuse_cones", format!("{} is not one of {DIFFUSE_CONE_COUNTS:?}", self.diffuse_cones)));
+        }
+        for (key, v) in [("diffuse_cone_angle", self.diffuse_cone_angle), ("shadow_cone_angle", self.shadow_cone_angle)]
+        {
+            if v > 179.0 {
+                return Err((key, format!("{v} degrees is not a cone aperture (0..=179)")));
+            }
+        }
+        if self.shadow_cone_angle < 0.01 {
+            return Err(("shadow_cone_angle", format!("{} degrees is below 0.01", self.shadow_cone_angle)));
+        }
+        if !(0.01..=4.0).contains(&self.step) {
+            return Err(("step", format!("{} is not in 0.01..=4", self.step)));
+        }
+        if self.start_offset > 16.0 {
+            return Err(("start_offset", format!("{} voxels is not in 0..=16", self.start_offset)));
+        }
+        if !(1..=8).contains(&self.downsample) {
+            return Err(("downsample", format!("{} is not in 1..=8", self.downsample)));
+        }
+        Ok(())
     }
 }
 
@@ -369,6 +504,10 @@ pub struct RenderSettings {
     pub shadow_normal_bias: f32,
     /// What the frame shows.
     pub view: View,
+    /// Level of detail shown by the `voxel-mip` view (0..=16).
+    pub view_lod: f32,
+    /// Direction shown by the `voxel-mip` view.
+    pub view_direction: ViewDirection,
     pub gi: GiSettings,
 }
 
@@ -384,6 +523,8 @@ impl Default for RenderSettings {
             shadow_filter_radius: 1.5,
             shadow_normal_bias: 1.5,
             view: View::Final,
+            view_lod: 0.0,
+            view_direction: ViewDirection::Ray,
             gi: GiSettings::default(),
         }
     }

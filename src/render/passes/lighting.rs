@@ -1,6 +1,7 @@
 //! Deferred direct lighting (compute): G-buffer + lights + shadow maps -> HDR radiance.
 
 use super::gbuffer::GBuffer;
+use super::gi_trace::{GiPlaceholders, GiTargets};
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline, Sampler};
 use crate::render::graph::{Pass, Use};
 use crate::render::FrameBuffers;
@@ -20,9 +21,25 @@ pub fn shadow_sampler_info() -> vk::SamplerCreateInfo<'static> {
         .compare_op(vk::CompareOp::LESS_OR_EQUAL)
 }
 
+/// What the lighting pass writes: the final image or a GI debug view.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LightingOutput {
+    Final = 0,
+    IndirectOnly = 1,
+    AmbientOcclusion = 2,
+}
+
+/// The cone-traced inputs of the composite.
+pub struct GiInputs<'a> {
+    pub targets: &'a GiTargets,
+    pub cone_shadows: bool,
+}
+
 pub struct LightingPass {
     gbuffer: Arc<GBuffer>,
     shadow_atlas: Arc<Image>,
+    gi: Option<GiTargets>,
+    placeholders: Arc<GiPlaceholders>,
     pub radiance: Arc<Image>,
     pipeline: Pipeline,
     set: DescriptorSet,
@@ -30,13 +47,20 @@ pub struct LightingPass {
 }
 
 impl LightingPass {
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Arc<Context>,
         frame: &FrameBuffers,
         gbuffer: &Arc<GBuffer>,
         shadow_atlas: &Arc<Image>,
         radiance: &Arc<Image>,
+        gi: Option<GiInputs>,
+        placeholders: &Arc<GiPlaceholders>,
+        output: LightingOutput,
     ) -> GpuResult<Self> {
+        let none = GiTargets { diffuse: placeholders.color.clone(), specular: None, shadow: None };
+        let targets = gi.as_ref().map(|g| g.targets).unwrap_or(&none);
+        let [gd, gs, gsh] = targets.binds(placeholders);
         let point = Sampler::new(
             ctx,
             "gbuffer sampler",
@@ -65,13 +89,24 @@ impl LightingPass {
                 Bind::Sampled(gbuffer.emission.view, point.raw, ro),
                 Bind::Sampled(shadow_atlas.view, compare.raw, depth_ro),
                 Bind::StorageImage(radiance.view),
+                gd,
+                gs,
+                gsh,
             ],
         )?;
+        let spec = [
+            (0, u32::from(gi.is_some())),
+            (1, u32::from(targets.specular.is_some())),
+            (2, u32::from(gi.as_ref().is_some_and(|g| g.cone_shadows))),
+            (3, output as u32),
+        ];
         let pipeline =
-            Pipeline::compute(ctx, "deferred lighting", shaders::DEFERRED_LIGHT_COMP, &[set.layout], 0, &[])?;
+            Pipeline::compute(ctx, "deferred lighting", shaders::DEFERRED_LIGHT_COMP, &[set.layout], 0, &spec)?;
         Ok(LightingPass {
             gbuffer: gbuffer.clone(),
             shadow_atlas: shadow_atlas.clone(),
+            gi: gi.map(|g| g.targets.clone()),
+            placeholders: placeholders.clone(),
             radiance: radiance.clone(),
             pipeline,
             set,
@@ -86,7 +121,7 @@ impl Pass for LightingPass {
     }
     fn uses(&self) -> Vec<Use<'_>> {
         let g = &self.gbuffer;
-        vec![
+        let mut uses = vec![
             Use::image(&g.depth, Access::ComputeShaderReadDepth),
             Use::image(&g.albedo, Access::ComputeShaderReadSampled),
             Use::image(&g.normal, Access::ComputeShaderReadSampled),
@@ -94,7 +129,16 @@ impl Pass for LightingPass {
             Use::image(&g.emission, Access::ComputeShaderReadSampled),
             Use::image(&self.shadow_atlas, Access::ComputeShaderReadDepth),
             Use::overwrite(&self.radiance, Access::ComputeShaderWrite),
-        ]
+        ];
+        match &self.gi {
+            Some(t) => uses.extend(t.uses(&self.placeholders, Access::ComputeShaderReadStorage)),
+            None => {
+                let p = &self.placeholders;
+                uses.push(Use::image(&p.color, Access::ComputeShaderReadStorage));
+                uses.push(Use::image(&p.shadow, Access::ComputeShaderReadStorage));
+            }
+        }
+        uses
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
         let e = self.radiance.extent2d();

@@ -1,12 +1,15 @@
 //! One module per pass; each declares what it reads and writes (`Pass::uses`).
 
 pub mod gbuffer;
+pub mod gi_trace;
 pub mod lighting;
 pub mod readback;
 pub mod shadow;
 pub mod tonemap;
+pub mod voxel_bounce;
 pub mod voxel_clear;
 pub mod voxel_light;
+pub mod voxel_mips;
 pub mod voxel_view;
 pub mod voxelize;
 

@@ -5,7 +5,7 @@ use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image
 use crate::render::graph::{Pass, Use};
 use crate::render::voxel::VoxelVolumes;
 use crate::render::FrameBuffers;
-use crate::scene::View;
+use crate::scene::{View, ViewDirection};
 use ash::vk;
 use std::sync::Arc;
 
@@ -43,13 +43,13 @@ impl VoxelViewPass {
                 Bind::Uniform(&volumes.grid_buffer),
                 Bind::StorageImage(volume.view),
                 Bind::StorageImage(radiance.view),
-                Bind::StorageImage(volumes.radiance.view),
+                Bind::StorageImage(volumes.final_radiance().view),
             ],
         )?;
         let pipeline = Pipeline::compute(ctx, "voxel view", shaders::VOXEL_VIEW_COMP, &[set.layout], 0, &[(0, mode)])?;
         Ok(VoxelViewPass {
             volume: volume.clone(),
-            voxel_radiance: volumes.radiance.clone(),
+            voxel_radiance: volumes.final_radiance().clone(),
             view,
             radiance: radiance.clone(),
             pipeline,
@@ -79,6 +79,77 @@ impl Pass for VoxelViewPass {
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
         let e = self.radiance.extent2d();
         self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.dispatch(cmd, [e.width, e.height, 1], [8, 8, 1]);
+    }
+}
+
+/// Debug view (`--view voxel-mip`): the radiance volumes as the cone tracer samples them, at a
+/// fixed level of detail and direction, composited along each camera ray.
+pub struct VoxelMipViewPass {
+    volumes: Arc<VoxelVolumes>,
+    lod0: Arc<Image>,
+    lod: f32,
+    pub radiance: Arc<Image>,
+    pipeline: Pipeline,
+    set: DescriptorSet,
+}
+
+impl VoxelMipViewPass {
+    pub fn new(
+        ctx: &Arc<Context>,
+        frame: &FrameBuffers,
+        volumes: &Arc<VoxelVolumes>,
+        lod: f32,
+        direction: ViewDirection,
+        radiance: &Arc<Image>,
+    ) -> GpuResult<Self> {
+        let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        let v = volumes;
+        let lod0 = v.final_radiance().clone();
+        let set = DescriptorSet::new(
+            ctx,
+            "voxel mip view",
+            vk::ShaderStageFlags::COMPUTE,
+            &[
+                Bind::Uniform(&frame.uniforms),
+                Bind::Uniform(&v.grid_buffer),
+                Bind::Uniform(&v.gi_params),
+                Bind::Sampled(lod0.view, v.sampler.raw, ro),
+                Bind::SampledArray(v.directional.iter().map(|d| d.view).collect(), v.sampler.raw, ro),
+                Bind::StorageImage(radiance.view),
+            ],
+        )?;
+        let dir = match direction {
+            ViewDirection::Ray => 0,
+            ViewDirection::PosX => 1,
+            ViewDirection::NegX => 2,
+            ViewDirection::PosY => 3,
+            ViewDirection::NegY => 4,
+            ViewDirection::PosZ => 5,
+            ViewDirection::NegZ => 6,
+        };
+        let pipeline =
+            Pipeline::compute(ctx, "voxel mip view", shaders::VOXEL_MIP_VIEW_COMP, &[set.layout], 4, &[(0, dir)])?;
+        Ok(VoxelMipViewPass { volumes: volumes.clone(), lod0, lod, radiance: radiance.clone(), pipeline, set })
+    }
+}
+
+impl Pass for VoxelMipViewPass {
+    fn name(&self) -> &str {
+        "voxel mip view"
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        let mut uses = vec![
+            Use::image(&self.lod0, Access::ComputeShaderReadSampled),
+            Use::overwrite(&self.radiance, Access::ComputeShaderWrite),
+        ];
+        uses.extend(self.volumes.directional.iter().map(|d| Use::image(d, Access::ComputeShaderReadSampled)));
+        uses
+    }
+    fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
+        let e = self.radiance.extent2d();
+        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.push(cmd, &self.lod);
         self.pipeline.dispatch(cmd, [e.width, e.height, 1], [8, 8, 1]);
     }
 }

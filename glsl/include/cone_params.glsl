@@ -1,0 +1,15 @@
+// Cone-tracing parameters (mirrors render::cones::GpuGiParams).
+#ifndef DVSGI_CONE_PARAMS_GLSL
+#define DVSGI_CONE_PARAMS_GLSL
+
+struct GiParams {
+    vec4 cones[16];     // xyz tangent-space direction, w weight
+    vec4 cone_tan[16];  // x tan(half aperture)
+    uvec4 counts;       // x diffuse cones, y downsample, z directional mip levels, w flags (1 AO)
+    vec4 trace;         // x step factor beta, y max distance (voxels), z start offset (voxels), w AO falloff per voxel
+    vec4 shadow;        // x tan(half aperture) of shadow cones
+};
+
+const uint GI_FLAG_AO = 1u;
+
+#endif

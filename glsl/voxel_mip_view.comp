@@ -1,0 +1,53 @@
+#version 460
+// Debug view of the radiance volumes exactly as the cone tracer samples them: each camera
+// ray marches the grid at a fixed level of detail, sampling in a fixed direction (one of the
+// six directional volumes) or along the ray, and composites front to back.
+#include "common.glsl"
+#include "voxel.glsl"
+#include "cone_params.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+// 0: along the camera ray; 1..6: +x, -x, +y, -y, +z, -z.
+layout(constant_id = 0) const uint DIRECTION = 0;
+
+layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
+layout(set = 0, binding = 1) uniform GridBlock { VoxelGrid grid; };
+layout(set = 0, binding = 2) uniform GiBlock { GiParams gi; };
+layout(set = 0, binding = 3) uniform sampler3D vox_lod0;
+layout(set = 0, binding = 4) uniform sampler3D aniso[6];
+layout(set = 0, binding = 5, rgba32f) uniform writeonly image2D out_radiance;
+#include "cone.glsl"
+
+layout(push_constant) uniform Push { float lod; } pc;
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(uvec2(px), frame.counts.xy))) return;
+    vec2 ndc = (vec2(px) + 0.5) / vec2(frame.counts.xy) * 2.0 - 1.0;
+    vec4 far_h = frame.inv_view_proj * vec4(ndc, 1.0, 1.0);
+    vec3 o = (frame.camera_pos.xyz - grid.origin.xyz) / grid.origin.w;
+    vec3 d = safe_normalize((far_h.xyz / far_h.w - frame.camera_pos.xyz) / grid.origin.w, vec3(0.0, 0.0, 1.0));
+    float res = float(grid.dims.x);
+    vec3 inv = 1.0 / d;
+    vec3 t0 = -o * inv, t1 = (vec3(res) - o) * inv;
+    vec3 tn = min(t0, t1), tf = max(t0, t1);
+    float tenter = max(max(tn.x, tn.y), max(tn.z, 0.0));
+    float texit = min(tf.x, min(tf.y, tf.z));
+    const vec3 axes[7] = vec3[7](vec3(0.0), vec3(1, 0, 0), vec3(-1, 0, 0), vec3(0, 1, 0), vec3(0, -1, 0),
+                                 vec3(0, 0, 1), vec3(0, 0, -1));
+    vec3 sdir = DIRECTION == 0u ? d : axes[DIRECTION];
+    float step = 0.5 * exp2(max(pc.lod, 0.0));
+    vec3 color = vec3(0.0);
+    float alpha = 0.0;
+    for (float t = tenter + 0.5 * step; t < texit && alpha < 0.995; t += step) {
+        vec4 s = sample_voxels(o + d * t, sdir, pc.lod);
+        float a = clamp(s.a, 0.0, 1.0);
+        if (a > 0.0) {
+            float c = 1.0 - pow(1.0 - min(a, 0.9999), 0.5);
+            color += (1.0 - alpha) * max(s.rgb, vec3(0.0)) * (c / a);
+            alpha += (1.0 - alpha) * c;
+        }
+    }
+    imageStore(out_radiance, px, vec4(color, 1.0));
+}
