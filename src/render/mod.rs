@@ -90,6 +90,8 @@ pub struct Renderer {
     lights_changed: bool,
     /// Barriers of the last recorded frame, described (for `--verbose` and tests).
     pub last_barriers: Vec<String>,
+    /// Passes of the last rendered frame, in order.
+    last_passes: Vec<String>,
 }
 
 impl Renderer {
@@ -171,6 +173,7 @@ impl Renderer {
             last_lights: Vec::new(),
             lights_changed: true,
             last_barriers: Vec::new(),
+            last_passes: Vec::new(),
         };
         me.cmd = unsafe {
             d.allocate_command_buffers(
@@ -208,6 +211,11 @@ impl Renderer {
         }
     }
 
+    /// Names of the passes the last rendered frame ran, in order.
+    pub fn last_pass_names(&self) -> &[String] {
+        &self.last_passes
+    }
+
     /// Update the voxels (revoxelize dynamic objects, relight, bounces) on the next frame,
     /// whatever `gi.update_interval` says.
     pub fn request_voxel_update(&mut self) {
@@ -226,8 +234,13 @@ impl Renderer {
 
     /// Copy an image of this renderer to the host (waits; for tests and debugging).
     pub fn download(&mut self, image: &Arc<crate::gpu::Image>) -> GpuResult<Vec<u8>> {
+        self.download_level(image, 0)
+    }
+
+    /// Copy one mip level of an image to the host (waits; for tests and debugging).
+    pub fn download_level(&mut self, image: &Arc<crate::gpu::Image>, level: u32) -> GpuResult<Vec<u8>> {
         let ctx = self.ctx.clone();
-        let copy = passes::readback::ImageDownload::new(&ctx, image)?;
+        let copy = passes::readback::ImageDownload::level(&ctx, image, level)?;
         let host = passes::readback::HostReadPass { buffers: vec![copy.buffer.clone()] };
         self.last_barriers =
             submit(&self.ctx, self.cmd, self.fence, &mut self.tracker, &mut self.timer, &[&copy, &host])?;
@@ -281,8 +294,9 @@ impl Renderer {
         }
         self.update(t);
         let state = self.frame_state(readback);
-        self.last_barriers =
-            submit(&ctx, self.cmd, self.fence, &mut self.tracker, &mut self.timer, &self.passes.list(state))?;
+        let list = self.passes.list(state);
+        self.last_passes = list.iter().map(|p| p.name().to_string()).collect();
+        self.last_barriers = submit(&ctx, self.cmd, self.fence, &mut self.tracker, &mut self.timer, &list)?;
         if self.passes.voxels.is_some() {
             self.static_voxelized = true;
         }

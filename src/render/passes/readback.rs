@@ -17,16 +17,25 @@ pub fn bytes_per_texel(format: vk::Format) -> u64 {
     }
 }
 
-/// Copy of one image (mip 0, layer 0, all depth slices) into a new host-visible buffer.
+/// Copy of one image (one mip level, layer 0, all depth slices) into a new host-visible buffer.
 pub struct ImageDownload {
     image: Arc<Image>,
+    level: u32,
+    extent: vk::Extent3D,
     pub buffer: Arc<Buffer>,
     name: String,
 }
 
 impl ImageDownload {
+    /// Mip level 0.
     pub fn new(ctx: &Arc<Context>, image: &Arc<Image>) -> GpuResult<Self> {
-        let e = image.desc.extent;
+        Self::level(ctx, image, 0)
+    }
+
+    pub fn level(ctx: &Arc<Context>, image: &Arc<Image>, level: u32) -> GpuResult<Self> {
+        let full = image.desc.extent;
+        let shrink = |v: u32| (v >> level).max(1);
+        let e = vk::Extent3D { width: shrink(full.width), height: shrink(full.height), depth: shrink(full.depth) };
         let size = e.width as u64 * e.height as u64 * e.depth as u64 * bytes_per_texel(image.desc.format);
         Ok(ImageDownload {
             buffer: Arc::new(Buffer::new(
@@ -37,16 +46,17 @@ impl ImageDownload {
                 MemoryLocation::GpuToCpu,
             )?),
             image: image.clone(),
-            name: format!("readback {}", image.name),
+            level,
+            extent: e,
+            name: format!("readback {} level {level}", image.name),
         })
     }
 
     /// The bytes of the last completed copy.
     pub fn bytes(&self) -> &[u8] {
-        let n = self.image.desc.extent.width as usize
-            * self.image.desc.extent.height as usize
-            * self.image.desc.extent.depth as usize
-            * bytes_per_texel(self.image.desc.format) as usize;
+        let e = self.extent;
+        let n =
+            e.width as usize * e.height as usize * e.depth as usize * bytes_per_texel(self.image.desc.format) as usize;
         &self.buffer.mapped().expect("host-visible readback")[..n]
     }
 }
@@ -65,7 +75,14 @@ impl Pass for ImageDownload {
                 self.image.raw,
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                 self.buffer.raw,
-                &[self.image.copy_region()],
+                &[vk::BufferImageCopy {
+                    image_subresource: vk::ImageSubresourceLayers {
+                        mip_level: self.level,
+                        ..self.image.copy_region().image_subresource
+                    },
+                    image_extent: self.extent,
+                    ..self.image.copy_region()
+                }],
             )
         };
     }
