@@ -40,7 +40,8 @@ enum Command {
         /// Scene time in seconds at which motion is evaluated (overrides render.time).
         #[arg(long)]
         time: Option<f32>,
-        /// What to show: final | voxel-albedo | voxel-normal | voxel-emission | voxel-radiance
+        /// What to show: final | indirect | ao | voxel-albedo | voxel-normal | voxel-emission |
+        /// voxel-radiance | voxel-mip (with --set render.view_lod=.. render.view_direction=..)
         /// (overrides render.view).
         #[arg(long)]
         view: Option<String>,
