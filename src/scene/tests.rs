@@ -947,4 +947,37 @@ fn gi_settings_parse_override_and_validate() {
     }
     let e = with_overrides(&p, &["gi.mode=\"path\""]).unwrap_err().to_string();
     assert!(e.contains("path"), "{e}");
+    // Every cone-tracing knob is range-checked and named in the error.
+    for (bad, key) in [
+        ("gi.diffuse_cones=5", "gi.diffuse_cones"),
+        ("gi.bounces=17", "gi.bounces"),
+        ("gi.step=0", "gi.step"),
+        ("gi.step=5", "gi.step"),
+        ("gi.downsample=0", "gi.downsample"),
+        ("gi.downsample=9", "gi.downsample"),
+        ("gi.diffuse_cone_angle=180", "gi.diffuse_cone_angle"),
+        ("gi.shadow_cone_angle=0", "gi.shadow_cone_angle"),
+        ("gi.ao_falloff=-1", "gi.ao_falloff"),
+        ("gi.max_distance=-2", "gi.max_distance"),
+        ("gi.start_offset=17", "gi.start_offset"),
+        ("gi.step=nan", "gi.step"),
+        ("render.view_lod=-1", "render.view_lod"),
+        ("render.view_direction=\"up\"", "up"),
+    ] {
+        let e = with_overrides(&p, &[bad]).unwrap_err().to_string();
+        assert!(e.contains(key) && e.contains("cornell-box.toml"), "{bad}: {e}");
+    }
+    let s = with_overrides(
+        &p,
+        &[
+            "gi.bounces=3",
+            "gi.diffuse_cones=16",
+            "gi.shadows=\"cone\"",
+            "render.view=\"voxel-mip\"",
+            "render.view_direction=\"-z\"",
+        ],
+    )
+    .unwrap();
+    assert_eq!((s.settings.gi.bounces, s.settings.gi.diffuse_cones), (3, 16));
+    assert_eq!((s.settings.gi.shadows, s.settings.view_direction), (DirectShadows::Cone, ViewDirection::NegZ));
 }
