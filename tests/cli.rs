@@ -113,9 +113,40 @@ fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.contains("voxel clear -> voxelize static -> shadow maps"), "{out}");
     assert!(out.contains("volume voxel albedo: 0.12 MiB") && out.contains("volume voxel normal: 0.12 MiB"), "{out}");
-    for absent in ["voxel emission", "voxel static flags", "voxel clear dynamic", "voxelize dynamic"] {
+    for absent in
+        ["voxel emission", "voxel static flags", "voxel clear dynamic", "voxelize dynamic", "gi specular", "gi shadow"]
+    {
         assert!(!out.contains(absent), "{absent} should not exist:\n{out}");
     }
+    // Cone tracing: six directional volumes with their mips, one bounce volume, the diffuse
+    // target; no upsample at full resolution.
+    for present in ["voxel mips (voxel radiance)", "voxel bounce", "cone trace -> deferred lighting"] {
+        assert!(out.contains(present), "{present} missing:\n{out}");
+    }
+    assert!(out.contains("volume voxel radiance -z") && out.contains("image gi diffuse"), "{out}");
+    assert!(!out.contains("gi upsample") && !out.contains("bounce b"), "{out}");
+    // Glossy materials add the specular target; reduced resolution adds the upsample.
+    let o = dvsgi(
+        &["info", "scenes/cornell-glossy.toml", "--set", "gi.voxel_resolution=16", "--set", "gi.downsample=2"],
+        &[],
+    );
+    let out = stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.contains("image gi specular (1/2)") && out.contains("cone trace -> gi upsample"), "{out}");
+    // No cones without GI: the voxel views that show the volumes themselves build no mips.
+    let o = dvsgi(
+        &[
+            "info",
+            "scenes/cornell-box.toml",
+            "--set",
+            "gi.voxel_resolution=16",
+            "--set",
+            "render.view=\"voxel-albedo\"",
+        ],
+        &[],
+    );
+    let out = stdout(&o);
+    assert!(out.contains("voxelize static") && !out.contains("voxel mips") && !out.contains("cone trace"), "{out}");
     let o = dvsgi(&["info", "scenes/dynamic-test.toml", "--gi", "vct"], &[]);
     assert!(!o.status.success(), "info takes --set, not --gi");
     let o = dvsgi(
