@@ -7,6 +7,7 @@
 #include "brdf.glsl"
 #include "lights.glsl"
 #include "shadow.glsl"
+#include "gbuffer_read.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -39,9 +40,7 @@ void main() {
         imageStore(out_radiance, px, vec4(0.0, 0.0, 0.0, 1.0));  // background: black (AO view too)
         return;
     }
-    vec2 ndc_xy = (vec2(px) + 0.5) / vec2(size) * 2.0 - 1.0;
-    vec4 world = frame.inv_view_proj * vec4(ndc_xy, depth, 1.0);
-    vec3 P = world.xyz / world.w;
+    vec3 P = world_position(frame, px, depth);
     vec3 albedo = texelFetch(g_albedo, px, 0).rgb;
     vec4 ns = texelFetch(g_normal, px, 0);
     vec3 N = safe_normalize(ns.xyz, vec3(0.0, 1.0, 0.0));

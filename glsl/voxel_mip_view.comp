@@ -4,6 +4,7 @@
 // six directional volumes) or along the ray, and composites front to back.
 #include "common.glsl"
 #include "voxel.glsl"
+#include "grid_ray.glsl"
 #include "cone_params.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -24,23 +25,15 @@ layout(push_constant) uniform Push { float lod; } pc;
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(uvec2(px), frame.counts.xy))) return;
-    vec2 ndc = (vec2(px) + 0.5) / vec2(frame.counts.xy) * 2.0 - 1.0;
-    vec4 far_h = frame.inv_view_proj * vec4(ndc, 1.0, 1.0);
-    vec3 o = (frame.camera_pos.xyz - grid.origin.xyz) / grid.origin.w;
-    vec3 d = safe_normalize((far_h.xyz / far_h.w - frame.camera_pos.xyz) / grid.origin.w, vec3(0.0, 0.0, 1.0));
-    float res = float(grid.dims.x);
-    vec3 inv = 1.0 / d;
-    vec3 t0 = -o * inv, t1 = (vec3(res) - o) * inv;
-    vec3 tn = min(t0, t1), tf = max(t0, t1);
-    float tenter = max(max(tn.x, tn.y), max(tn.z, 0.0));
-    float texit = min(tf.x, min(tf.y, tf.z));
+    GridRay ray = camera_grid_ray(frame, grid, px);
+    vec3 o = ray.o, d = ray.d;
     const vec3 axes[7] = vec3[7](vec3(0.0), vec3(1, 0, 0), vec3(-1, 0, 0), vec3(0, 1, 0), vec3(0, -1, 0),
                                  vec3(0, 0, 1), vec3(0, 0, -1));
     vec3 sdir = DIRECTION == 0u ? d : axes[DIRECTION];
     float step = 0.5 * exp2(max(pc.lod, 0.0));
     vec3 color = vec3(0.0);
     float alpha = 0.0;
-    for (float t = tenter + 0.5 * step; t < texit && alpha < 0.995; t += step) {
+    for (float t = ray.tenter + 0.5 * step; t < ray.texit && alpha < 0.995; t += step) {
         vec4 s = sample_voxels(o + d * t, sdir, pc.lod);
         float a = clamp(s.a, 0.0, 1.0);
         if (a > 0.0) {

@@ -3,6 +3,7 @@
 // non-empty voxel's albedo, normal (0.5 + 0.5 n) or emitted radiance.
 #include "common.glsl"
 #include "voxel.glsl"
+#include "grid_ray.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -17,17 +18,11 @@ layout(set = 0, binding = 4, rgba16f) uniform readonly image3D vox_radiance;
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(uvec2(px), frame.counts.xy))) return;
-    vec2 ndc = (vec2(px) + 0.5) / vec2(frame.counts.xy) * 2.0 - 1.0;
-    vec4 far_h = frame.inv_view_proj * vec4(ndc, 1.0, 1.0);
-    vec3 o = (frame.camera_pos.xyz - grid.origin.xyz) / grid.origin.w;
-    vec3 d = safe_normalize((far_h.xyz / far_h.w - frame.camera_pos.xyz) / grid.origin.w, vec3(0.0, 0.0, 1.0));
+    GridRay ray = camera_grid_ray(frame, grid, px);
+    vec3 o = ray.o, d = ray.d;
+    float tenter = ray.tenter, texit = ray.texit;
     float res = float(grid.dims.x);
-    // Clip the ray to the grid box [0, res]^3.
-    vec3 inv = 1.0 / d;  // +-inf for zero components is handled by min/max below
-    vec3 t0 = (vec3(0.0) - o) * inv, t1 = (vec3(res) - o) * inv;
-    vec3 tn = min(t0, t1), tf = max(t0, t1);
-    float tenter = max(max(tn.x, tn.y), max(tn.z, 0.0));
-    float texit = min(tf.x, min(tf.y, tf.z));
+    vec3 inv = 1.0 / d;
     vec4 result = vec4(0.0, 0.0, 0.0, 1.0);
     if (tenter < texit) {
         vec3 p = o + d * (tenter + 1e-4);

@@ -36,8 +36,6 @@ pub struct VoxelPasses {
     /// a -> b, b -> a (as many as the bounce count needs). Bounce i runs step
     /// [`bounce_step`]`(i)`.
     pub bounces: Vec<(VoxelBouncePass, VoxelMipPass)>,
-    /// Light bounces per update.
-    pub bounce_count: u32,
 }
 
 /// The step that performs bounce `i` (see [`VoxelPasses::bounces`]).
@@ -158,7 +156,6 @@ impl FramePasses {
                 voxelize_static: VoxelizePass::new(&voxelizer, false),
                 dynamic,
                 mips,
-                bounce_count: volumes.needs.bounces,
                 bounces,
                 volumes,
             })
@@ -289,7 +286,7 @@ impl FramePasses {
             if let Some(mips) = &v.mips {
                 passes.push(mips);
             }
-            for i in 0..v.bounce_count {
+            for i in 0..v.volumes.needs.bounces {
                 let (bounce, mips) = &v.bounces[bounce_step(i)];
                 passes.push(bounce);
                 passes.push(mips);

@@ -1,6 +1,8 @@
 //! G-buffer by dynamic rendering: depth, linear albedo, normal + shininess, specular, emission.
 
-use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, GraphicsDesc, Image, ImageDesc, Pipeline};
+use crate::gpu::{
+    shaders, Access, Bind, Context, DescriptorSet, GpuResult, GraphicsDesc, Image, ImageDesc, Pipeline, Sampler,
+};
 use crate::render::graph::{Pass, Use};
 use crate::render::scene_gpu::SceneGpu;
 use crate::render::FrameBuffers;
@@ -39,6 +41,19 @@ impl GBuffer {
             specular: mk("gbuffer specular", SPECULAR_FORMAT, color)?,
             emission: mk("gbuffer emission", EMISSION_FORMAT, color)?,
         })
+    }
+    /// Point sampling for compute passes that read the G-buffer texel by texel.
+    pub fn sampler(ctx: &Arc<Context>) -> GpuResult<Sampler> {
+        Sampler::new(
+            ctx,
+            "gbuffer sampler",
+            &vk::SamplerCreateInfo::default()
+                .mag_filter(vk::Filter::NEAREST)
+                .min_filter(vk::Filter::NEAREST)
+                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE),
+        )
     }
     pub fn colors(&self) -> [&Arc<Image>; 4] {
         [&self.albedo, &self.normal, &self.specular, &self.emission]

@@ -83,18 +83,6 @@ impl GiTargets {
     }
 }
 
-fn gbuffer_sampler(ctx: &Arc<Context>) -> GpuResult<Sampler> {
-    Sampler::new(
-        ctx,
-        "gi gbuffer sampler",
-        &vk::SamplerCreateInfo::default()
-            .mag_filter(vk::Filter::NEAREST)
-            .min_filter(vk::Filter::NEAREST)
-            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE),
-    )
-}
-
 pub struct GiTracePass {
     gbuffer: Arc<GBuffer>,
     volumes: Arc<VoxelVolumes>,
@@ -116,7 +104,7 @@ impl GiTracePass {
         targets: GiTargets,
         placeholders: &Arc<GiPlaceholders>,
     ) -> GpuResult<Self> {
-        let sampler = gbuffer_sampler(ctx)?;
+        let sampler = GBuffer::sampler(ctx)?;
         let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let v = volumes;
         let lod0 = v.final_radiance().clone();
@@ -204,7 +192,7 @@ impl GiUpsamplePass {
         targets: GiTargets,
         placeholders: &Arc<GiPlaceholders>,
     ) -> GpuResult<Self> {
-        let sampler = gbuffer_sampler(ctx)?;
+        let sampler = GBuffer::sampler(ctx)?;
         let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let [ld, ls, lsh] = low.binds(placeholders);
         let [d, s, sh] = targets.binds(placeholders);

@@ -61,16 +61,7 @@ impl LightingPass {
         let none = GiTargets { diffuse: placeholders.color.clone(), specular: None, shadow: None };
         let targets = gi.as_ref().map(|g| g.targets).unwrap_or(&none);
         let [gd, gs, gsh] = targets.binds(placeholders);
-        let point = Sampler::new(
-            ctx,
-            "gbuffer sampler",
-            &vk::SamplerCreateInfo::default()
-                .mag_filter(vk::Filter::NEAREST)
-                .min_filter(vk::Filter::NEAREST)
-                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE),
-        )?;
+        let point = GBuffer::sampler(ctx)?;
         let compare = Sampler::new(ctx, "shadow compare sampler", &shadow_sampler_info())?;
         let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let depth_ro = vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL;
