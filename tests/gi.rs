@@ -268,3 +268,21 @@ fn voxel_update_policy() {
     drop(r);
     assert_no_validation_messages(&ctx);
 }
+
+/// The voxel-mip view shows the radiance volumes at any level and direction: not black at the
+/// full resolution and at fractional levels, darker in no direction than black, finite.
+#[test]
+fn voxel_mip_view_renders_every_level_and_direction() {
+    let ctx = context();
+    for (lod, dir) in [("0", "\"ray\""), ("1.5", "\"+x\""), ("3", "\"-y\""), ("5", "\"ray\"")] {
+        let (out, _) = render(
+            &ctx,
+            cornell(
+                "cornell-box.toml",
+                &[("render.view", "\"voxel-mip\""), ("render.view_lod", lod), ("render.view_direction", dir)],
+            ),
+        );
+        assert!(out.radiance.iter().all(|v| v.is_finite() && *v >= 0.0), "lod {lod} {dir}");
+        assert!(mean_radiance(&out) > 0.0, "lod {lod} {dir} is black");
+    }
+}
