@@ -29,8 +29,9 @@ layout(set = 0, binding = 10, rgba16f) uniform writeonly image2D out_specular;
 layout(set = 0, binding = 11, rgba8) uniform writeonly image2D out_shadow;
 #include "cone.glsl"
 
-// Half aperture of the specular cone for Blinn-Phong exponent n (mirrors
-// render::cones::specular_half_angle): half the energy of the Phong lobe of exponent n/4.
+// Half aperture of the specular cone for Blinn-Phong exponent n: the cone holding half the
+// energy of the equivalent Phong lobe (exponent n/4, energy within angle a of the mirror
+// direction 1 - cos^(n/4+1) a), clamped to 0.25..85 degrees.
 float specular_tan_half(float n) {
     float a = acos(pow(0.5, 1.0 / (max(n, 0.0) / 4.0 + 1.0)));
     return tan(clamp(a, radians(0.25), radians(85.0)));

@@ -57,6 +57,19 @@ impl Buffer {
     }
 
     /// Host-visible bytes (CpuToGpu / GpuToCpu buffers only).
+    /// A host-visible uniform buffer holding `value`.
+    pub fn uniform<T: bytemuck::Pod>(ctx: &Arc<Context>, name: &str, value: &T) -> GpuResult<Buffer> {
+        let b = Buffer::new(
+            ctx,
+            name,
+            std::mem::size_of::<T>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+        b.write_pod(std::slice::from_ref(value));
+        Ok(b)
+    }
+
     pub fn mapped(&self) -> Option<&[u8]> {
         self.allocation.as_ref()?.mapped_slice()
     }

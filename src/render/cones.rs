@@ -72,14 +72,6 @@ pub fn diffuse_cones(n: u32, aperture_deg: f32) -> Vec<Cone> {
     cones
 }
 
-/// Half aperture (radians) of the specular cone for Blinn-Phong exponent `shininess`: the
-/// cone holding half the energy of the equivalent Phong lobe (exponent n/4, whose energy
-/// within angle a of the mirror direction is 1 - cos^(n/4+1) a).
-pub fn specular_half_angle(shininess: f32) -> f32 {
-    let phong = shininess.max(0.0) / 4.0;
-    0.5f32.powf(1.0 / (phong + 1.0)).acos().clamp(0.25f32.to_radians(), MAX_HALF_ANGLE_DEG.to_radians())
-}
-
 pub const MAX_CONES: usize = 16;
 
 /// Mirrors `GiParams` in glsl/include/cone.glsl (std140: vec4 only).
@@ -171,17 +163,5 @@ mod tests {
         // A given aperture overrides.
         let c = diffuse_cones(6, 60.0);
         assert!(c.iter().all(|c| (c.tan_half - 30f32.to_radians().tan()).abs() < 1e-5));
-    }
-
-    #[test]
-    fn specular_cone_narrows_with_shininess() {
-        let a1 = specular_half_angle(1.0);
-        let a100 = specular_half_angle(100.0);
-        let a10k = specular_half_angle(10000.0);
-        assert!(a1 > a100 && a100 > a10k, "{a1} {a100} {a10k}");
-        // Phong exponent 25: cos a = 0.5^(1/26).
-        assert!((a100 - 0.5f32.powf(1.0 / 26.0).acos()).abs() < 1e-5);
-        assert!(specular_half_angle(0.0) <= MAX_HALF_ANGLE_DEG.to_radians());
-        assert!(specular_half_angle(f32::MAX).is_finite());
     }
 }

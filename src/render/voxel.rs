@@ -9,7 +9,6 @@ use crate::scene::{Aabb, GiMode, Scene, View};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
-use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 pub const RADIANCE_VOLUME_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
@@ -150,14 +149,8 @@ impl VoxelVolumes {
                 .map(Arc::new)
             })
             .collect::<GpuResult<Vec<_>>>()?;
-        let gi_params = Buffer::new(
-            ctx,
-            "gi params",
-            std::mem::size_of::<GpuGiParams>() as u64,
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
-            MemoryLocation::CpuToGpu,
-        )?;
-        gi_params.write_pod(&[GpuGiParams::new(&scene.settings.gi, res, grid.voxel_size, mip_levels)]);
+        let gi_params =
+            Buffer::uniform(ctx, "gi params", &GpuGiParams::new(&scene.settings.gi, res, grid.voxel_size, mip_levels))?;
         let sampler = Sampler::new(
             ctx,
             "voxel volume sampler",
@@ -172,18 +165,15 @@ impl VoxelVolumes {
                 .max_lod(mip_levels as f32),
         )?;
         let emission_scale = scene.materials.iter().map(|m| m.emission.max_element()).fold(0.0f32, f32::max).max(1e-6);
-        let grid_buffer = Buffer::new(
+        let grid_buffer = Buffer::uniform(
             ctx,
             "voxel grid",
-            std::mem::size_of::<GpuVoxelGrid>() as u64,
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
-            MemoryLocation::CpuToGpu,
+            &GpuVoxelGrid {
+                origin: [grid.origin.x, grid.origin.y, grid.origin.z, grid.voxel_size],
+                dims: [res, 0, 0, 0],
+                params: [emission_scale, 0.0, 0.0, 0.0],
+            },
         )?;
-        grid_buffer.write_pod(&[GpuVoxelGrid {
-            origin: [grid.origin.x, grid.origin.y, grid.origin.z, grid.voxel_size],
-            dims: [res, 0, 0, 0],
-            params: [emission_scale, 0.0, 0.0, 0.0],
-        }]);
         Ok(VoxelVolumes {
             grid,
             needs,
