@@ -4,6 +4,7 @@
 //! [`gpu`] (Vulkan context, memory, barriers, pipelines; `GpuError`), [`render`] (passes and
 //! frames over `gpu`), [`output`] (image files; `OutputError`); [`Error`] joins them.
 
+pub mod bench;
 pub mod cli;
 pub mod error;
 pub mod gpu;

@@ -49,11 +49,17 @@ pub fn format_of(path: &Path) -> Result<Format, OutputError> {
 /// Check that `path` can be written (format known, directory exists) before rendering.
 pub fn check_target(path: &Path) -> Result<Format, OutputError> {
     let format = format_of(path)?;
+    check_target_dir(path)?;
+    Ok(format)
+}
+
+/// Check that the directory of `path` exists (any file type; reports, pictures).
+pub fn check_target_dir(path: &Path) -> Result<(), OutputError> {
     let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
     if !dir.is_dir() {
         return Err(OutputError::NoDirectory { path: path.to_path_buf(), dir: dir.to_path_buf() });
     }
-    Ok(format)
+    Ok(())
 }
 
 /// Linear RGB f32 radiance of a frame (alpha dropped).

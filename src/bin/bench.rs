@@ -1,21 +1,40 @@
-//! `bench`: times frames of a scene. For now (before the GI and async-compute work) it times
-//! the direct-lighting frame: host wall clock per frame beside per-pass GPU timestamps.
+//! `bench`: the async-compute experiment. Runs the same scene in each schedule mode (sync,
+//! async, async-lagged), and reports host wall clock per frame beside per-pass GPU timestamps
+//! on both queues, the async/sync ratio, the image error each mode's schedule introduces,
+//! and a timeline picture of one frame per mode. See BENCHMARKS.md.
 
-use clap::Parser;
-use dvsgi::cli::{check_validation, report, stats, CommonArgs};
-use dvsgi::render::Renderer;
-use std::path::PathBuf;
+use clap::{Parser, ValueEnum};
+use dvsgi::bench::{self, ImageError, ModeReport, PassReport, Report, Stats, TimelinePass, WaitReport};
+use dvsgi::cli::{check_validation, report, CommonArgs};
+use dvsgi::gpu::{Context, QueueTopology};
+use dvsgi::render::graph::QueueKind;
+use dvsgi::render::{Mode, RenderOptions, Renderer};
+use dvsgi::scene::Scene;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::time::Instant;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Scenario {
+    /// Nothing moves: after the first frame only what the update policy asks for is redone.
+    Static,
+    /// Scene time advances by --dt each frame and the voxels are revoxelized, relit and
+    /// bounced every frame (needs a scene with moving objects or lights).
+    Dynamic,
+}
 
 #[derive(Parser)]
-#[command(name = "bench", version, about = "Time dvsgi frames: host wall clock and GPU timestamps")]
+#[command(name = "bench", version, about = "The async-compute experiment: time dvsgi frames per schedule mode")]
 struct Args {
     #[command(flatten)]
     common: CommonArgs,
     /// Scene file.
     #[arg(long)]
     scene: PathBuf,
-    /// Frames measured (after warm-up).
+    /// Schedule modes to compare, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "sync,async,async-lagged")]
+    modes: Vec<Mode>,
+    /// Frames measured per mode (after warm-up).
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     frames: u32,
     /// Frames rendered first and not measured.
@@ -25,12 +44,27 @@ struct Args {
     width: Option<u32>,
     #[arg(long)]
     height: Option<u32>,
-    /// Advance scene time by this many seconds per frame (moving objects and lights).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, value_enum, default_value = "static")]
+    scenario: Scenario,
+    /// Scene seconds per frame in the dynamic scenario.
+    #[arg(long, default_value_t = 1.0 / 30.0)]
     dt: f32,
-    /// Write the results as JSON here.
+    /// Frames recorded ahead of the GPU (the same in every mode).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=8))]
+    frames_in_flight: u32,
+    /// Also host-time every pass (submitted alone and waited for), for devices whose
+    /// timestamps cannot be trusted (lavapipe). Runs 3 extra frames per mode.
+    #[arg(long)]
+    serial_profile: bool,
+    /// Frames compared against sync to measure each mode's image error (0: skip).
+    #[arg(long, default_value_t = 3)]
+    error_frames: u32,
+    /// Write the report as JSON (schema dvsgi-bench/1, see BENCHMARKS.md).
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Write the timeline picture (SVG): one lane per queue per mode.
+    #[arg(long)]
+    timeline: Option<PathBuf>,
 }
 
 fn main() -> ExitCode {
@@ -43,7 +77,17 @@ fn main() -> ExitCode {
     }
 }
 
+fn usage(msg: String) -> dvsgi::Error {
+    dvsgi::Error::Usage(msg)
+}
+
 fn run(args: Args) -> dvsgi::Result<()> {
+    for out in args.json.iter().chain(&args.timeline) {
+        dvsgi::output::check_target_dir(out)?;
+    }
+    if args.modes.is_empty() {
+        return Err(usage("--modes: give at least one of sync, async, async-lagged".into()));
+    }
     let mut extra = Vec::new();
     if let Some(w) = args.width {
         extra.push(("render.width".to_string(), w.to_string()));
@@ -51,68 +95,298 @@ fn run(args: Args) -> dvsgi::Result<()> {
     if let Some(h) = args.height {
         extra.push(("render.height".to_string(), h.to_string()));
     }
+    if args.scenario == Scenario::Dynamic {
+        extra.push(("gi.update_interval".to_string(), "1".to_string()));
+    }
     let scene = args.common.load_scene(&args.scene, &extra)?;
+    let moves =
+        scene.objects.iter().any(|o| !o.motion.is_static()) || scene.lights.iter().any(|l| !l.motion.is_static());
+    if args.scenario == Scenario::Dynamic && !moves {
+        return Err(usage(format!(
+            "{}: the dynamic scenario needs moving objects or lights, and nothing in this scene moves \
+             (try scenes/dynamic-stress.toml)",
+            args.scene.display()
+        )));
+    }
+    if args.scenario == Scenario::Dynamic && !(args.dt.is_finite() && args.dt > 0.0) {
+        return Err(usage(format!("--dt must be a positive number of seconds, not {}", args.dt)));
+    }
     let ctx = args.common.context()?;
-    let t0 = scene.settings.time;
-    let mut renderer = Renderer::new(&ctx, scene)?;
-    let (w, h) = renderer.size();
-    let mut host = Vec::new();
-    let mut per_pass: Vec<(String, Vec<f64>)> = Vec::new();
-    for i in 0..args.warmup + args.frames {
-        let t = t0 + i as f32 * args.dt;
-        let s = renderer.render(t, false)?;
-        if i < args.warmup {
-            continue;
-        }
-        host.push(s.host_ms);
-        for p in s.passes {
-            match per_pass.iter_mut().find(|(n, _)| *n == p.name) {
-                Some((_, v)) => v.push(p.gpu_ms),
-                None => per_pass.push((p.name, vec![p.gpu_ms])),
+    let separate = ctx.topology != QueueTopology::SingleQueue;
+    eprintln!("device: {} ({}); {}", ctx.info.name, ctx.info.driver_info, ctx.topology.describe());
+    let mut modes = Vec::new();
+    let mut calibrated = true;
+    for &mode in &args.modes {
+        eprintln!("{mode}: {} frames after {} warm-up", args.frames, args.warmup);
+        let (m, cal) = measure(&ctx, &scene, &args, mode)?;
+        calibrated &= cal;
+        modes.push(m);
+    }
+    if args.error_frames > 0 {
+        for m in &mut modes {
+            let mode: Mode = m.mode.parse().map_err(usage)?;
+            if mode != Mode::Sync {
+                eprintln!("{mode}: image error against sync over {} frames", args.error_frames);
+                m.image_error_vs_sync = Some(image_error(&ctx, &scene, &args, mode)?);
             }
         }
     }
     check_validation(&ctx)?;
-    let (hmin, hmed, hp95) = stats(&host);
-    println!("device: {} ({}); queue topology: {}", ctx.info.name, ctx.info.driver_info, ctx.topology.describe());
-    println!("scene: {}  {}x{}  frames {} (+{} warm-up)", args.scene.display(), w, h, args.frames, args.warmup);
-    println!("{:<22} {:>10} {:>10} {:>10}", "", "min ms", "median ms", "p95 ms");
-    println!("{:<22} {:>10.3} {:>10.3} {:>10.3}", "frame (host wall clock)", hmin, hmed, hp95);
-    for (name, v) in &per_pass {
-        let (a, b, c) = stats(v);
-        println!("{:<22} {:>10.3} {:>10.3} {:>10.3}", format!("{name} (GPU)"), a, b, c);
+    let sync_mean = modes.iter().find(|m| m.mode == "sync").map(|m| m.frame_host_mean_ms);
+    for m in &mut modes {
+        if m.mode != "sync" {
+            m.frame_ratio_to_sync = sync_mean.map(|s| m.frame_host_mean_ms / s);
+        }
     }
-    if ctx.info.is_cpu() {
-        println!(
-            "note: {} is a CPU implementation; its GPU timestamps can be wrong — trust the host figures",
-            ctx.info.name
-        );
-    }
+    let report = Report {
+        schema: bench::SCHEMA.to_string(),
+        device: bench::DeviceReport {
+            name: ctx.info.name.clone(),
+            driver: ctx.info.driver_info.clone(),
+            device_type: format!("{:?}", ctx.info.device_type),
+            queue_topology: ctx.topology.describe().to_string(),
+            separate_queues: separate,
+            timestamps_calibrated: calibrated,
+            timestamps_trusted: !ctx.info.is_cpu(),
+        },
+        scene: args.scene.display().to_string(),
+        scenario: format!("{:?}", args.scenario).to_lowercase(),
+        width: scene.settings.width,
+        height: scene.settings.height,
+        voxel_resolution: scene.settings.gi.voxel_resolution,
+        frames: args.frames,
+        warmup: args.warmup,
+        frames_in_flight: args.frames_in_flight,
+        settings: args.common.sets.clone(),
+        modes,
+    };
+    print_table(&ctx, &report);
     if let Some(path) = &args.json {
-        let passes: Vec<_> = per_pass
-            .iter()
-            .map(|(n, v)| {
-                let (a, b, c) = stats(v);
-                serde_json::json!({"name": n, "gpu_ms": {"min": a, "median": b, "p95": c}})
-            })
-            .collect();
-        let doc = serde_json::json!({
-            "schema": "dvsgi-bench/0",
-            "device": ctx.info.name,
-            "driver": ctx.info.driver_info,
-            "queue_topology": ctx.topology.describe(),
-            "scene": args.scene.display().to_string(),
-            "width": w, "height": h,
-            "frames": args.frames, "warmup": args.warmup,
-            "frame_host_ms": {"min": hmin, "median": hmed, "p95": hp95, "samples": host},
-            "passes": passes,
-        });
-        let text = serde_json::to_string_pretty(&doc).expect("JSON serialisation");
-        let tmp = path.with_extension("json.tmp");
-        std::fs::write(&tmp, text)
-            .and_then(|_| std::fs::rename(&tmp, path))
-            .map_err(|e| dvsgi::Error::Usage(format!("{}: could not write: {e}", path.display())))?;
+        let text = serde_json::to_string_pretty(&report).expect("JSON serialisation");
+        write_atomic(path, text.as_bytes())?;
+        println!("wrote {}", path.display());
+    }
+    if let Some(path) = &args.timeline {
+        write_atomic(path, bench::timeline_svg(&report).as_bytes())?;
         println!("wrote {}", path.display());
     }
     Ok(())
+}
+
+/// Scene time of frame `i`.
+fn time_of(scene: &Scene, args: &Args, i: u32) -> f32 {
+    match args.scenario {
+        Scenario::Static => scene.settings.time,
+        Scenario::Dynamic => scene.settings.time + i as f32 * args.dt,
+    }
+}
+
+/// Time `args.frames` frames in `mode`. Returns the report and whether timestamps were calibrated.
+fn measure(ctx: &std::sync::Arc<Context>, scene: &Scene, args: &Args, mode: Mode) -> dvsgi::Result<(ModeReport, bool)> {
+    let options = RenderOptions { mode, frames_in_flight: args.frames_in_flight };
+    let mut r = Renderer::with_options(ctx, scene.clone(), options)?;
+    let total = args.warmup + args.frames;
+    let mut starts = Vec::with_capacity(total as usize);
+    let mut submits = 0usize;
+    let mut waits_before = r.scheduler().waits;
+    for i in 0..total {
+        if i == args.warmup {
+            waits_before = r.scheduler().waits;
+        }
+        if args.scenario == Scenario::Dynamic {
+            r.request_voxel_update();
+        }
+        starts.push(Instant::now());
+        r.render(time_of(scene, args, i), false)?;
+        if i >= args.warmup {
+            submits += r.scheduler().submits().len();
+        }
+    }
+    r.wait_idle()?;
+    let end = Instant::now();
+    let host: Vec<f64> = (args.warmup as usize..total as usize)
+        .map(|i| {
+            let next = starts.get(i + 1).copied().unwrap_or(end);
+            (next - starts[i]).as_secs_f64() * 1e3
+        })
+        .collect();
+    let w = r.scheduler().waits;
+    let waits = WaitReport {
+        slot_reuse: w.slot_reuse - waits_before.slot_reuse,
+        readback: w.readback - waits_before.readback,
+        in_frame: w.in_frame - waits_before.in_frame,
+        idle: w.idle - waits_before.idle,
+    };
+    let timings: Vec<_> = r.take_timings().into_iter().filter(|f| f.frame >= args.warmup as u64).collect();
+    let calibrated = timings.iter().all(|f| f.calibrated);
+    let mut serial: Vec<(String, Vec<f64>)> = Vec::new();
+    if args.serial_profile {
+        r.set_serial_profile(true);
+        for i in 0..3 {
+            if args.scenario == Scenario::Dynamic {
+                r.request_voxel_update();
+            }
+            r.render(time_of(scene, args, total + i), false)?;
+            for s in r.scheduler().serial_times() {
+                match serial.iter_mut().find(|(n, _)| *n == s.name) {
+                    Some((_, v)) => v.push(s.host_ms),
+                    None => serial.push((s.name.clone(), vec![s.host_ms])),
+                }
+            }
+        }
+        r.set_serial_profile(false);
+        r.wait_idle()?;
+    }
+    let mut passes: Vec<PassReport> = bench::pass_stats(&timings)
+        .into_iter()
+        .map(|(name, q, v)| PassReport {
+            serial_host_ms: serial.iter().find(|(n, _)| *n == name).and_then(|(_, s)| Stats::of(s)),
+            name,
+            queue: q.name().to_string(),
+            gpu_ms: Stats::of(&v),
+        })
+        .collect();
+    if timings.iter().all(|f| f.passes.is_empty()) {
+        // No timestamps on this device: list the passes with their host times only.
+        passes = serial
+            .iter()
+            .map(|(n, s)| PassReport {
+                name: n.clone(),
+                queue: String::new(),
+                gpu_ms: None,
+                serial_host_ms: Stats::of(s),
+            })
+            .collect();
+    }
+    let with_stamps: Vec<_> = timings.iter().filter(|f| !f.passes.is_empty()).collect();
+    let span: Vec<f64> = with_stamps.iter().map(|f| f.gpu_span_ms()).collect();
+    let busy = |q| with_stamps.iter().map(|f| bench::busy_ms(f, q)).collect::<Vec<_>>();
+    let timeline = bench::representative(&timings)
+        .map(|f| {
+            f.passes
+                .iter()
+                .map(|p| TimelinePass {
+                    name: p.name.clone(),
+                    queue: p.queue.name().to_string(),
+                    begin_ms: p.begin_ms,
+                    end_ms: p.end_ms,
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let report = ModeReport {
+        mode: mode.name().to_string(),
+        frame_host_ms: Stats::of(&host).expect("at least one frame"),
+        frame_host_mean_ms: (end - starts[args.warmup as usize]).as_secs_f64() * 1e3 / args.frames as f64,
+        frame_host_samples: host,
+        gpu_span_ms: Stats::of(&span),
+        graphics_busy_ms: Stats::of(&busy(QueueKind::Graphics)),
+        compute_busy_ms: Stats::of(&busy(QueueKind::Compute)),
+        passes,
+        host_waits: waits,
+        submits_per_frame: submits as f64 / args.frames as f64,
+        frame_ratio_to_sync: None,
+        image_error_vs_sync: None,
+        timeline,
+    };
+    Ok((report, calibrated))
+}
+
+/// Render the same frames in sync and in `mode` (two renderers) and compare the radiance.
+fn image_error(ctx: &std::sync::Arc<Context>, scene: &Scene, args: &Args, mode: Mode) -> dvsgi::Result<ImageError> {
+    let opts = |mode| RenderOptions { mode, frames_in_flight: args.frames_in_flight };
+    let mut reference = Renderer::with_options(ctx, scene.clone(), opts(Mode::Sync))?;
+    let mut other = Renderer::with_options(ctx, scene.clone(), opts(mode))?;
+    let mut errors = Vec::new();
+    for i in 0..args.error_frames {
+        let t = time_of(scene, args, i);
+        if args.scenario == Scenario::Dynamic {
+            reference.request_voxel_update();
+            other.request_voxel_update();
+        }
+        reference.render(t, true)?;
+        other.render(t, true)?;
+        errors.push(bench::relative_error(&reference.output().radiance, &other.output().radiance));
+    }
+    Ok(ImageError {
+        frames: args.error_frames,
+        mean_relative: errors.iter().sum::<f64>() / errors.len() as f64,
+        max_relative: errors.iter().copied().fold(0.0, f64::max),
+    })
+}
+
+fn print_table(ctx: &Context, r: &Report) {
+    println!("device: {} ({}); queue topology: {}", r.device.name, r.device.driver, r.device.queue_topology);
+    if !r.device.separate_queues {
+        println!("note: one queue — the async modes submit both streams to it, so they cannot overlap here");
+    }
+    println!(
+        "scene: {}  {}x{}  voxels {}³  {} scenario  {} frames (+{} warm-up), {} in flight",
+        r.scene, r.width, r.height, r.voxel_resolution, r.scenario, r.frames, r.warmup, r.frames_in_flight
+    );
+    let longest = r.modes.iter().flat_map(|m| &m.passes).map(|p| p.name.len() + 17).max().unwrap_or(0);
+    let w = longest.max(34);
+    let mut head = format!("{:<w$}", "median ms (min..p95)");
+    for m in &r.modes {
+        head.push_str(&format!(" {:>24}", m.mode));
+    }
+    println!("{head}");
+    let row = |label: &str, f: &dyn Fn(&ModeReport) -> String| {
+        let mut line = format!("{label:<w$}");
+        for m in &r.modes {
+            line.push_str(&format!(" {:>24}", f(m)));
+        }
+        println!("{line}");
+    };
+    let fmt = |s: Option<Stats>| match s {
+        Some(s) => format!("{:.2} ({:.2}..{:.2})", s.median, s.min, s.p95),
+        None => "-".to_string(),
+    };
+    row("frame, host wall clock: mean", &|m| format!("{:.2}", m.frame_host_mean_ms));
+    row("  interval between frame starts", &|m| fmt(Some(m.frame_host_ms)));
+    row("frame GPU span (timestamps)", &|m| fmt(m.gpu_span_ms));
+    row("graphics queue busy (timestamps)", &|m| fmt(m.graphics_busy_ms));
+    row("compute queue busy (timestamps)", &|m| fmt(m.compute_busy_ms));
+    let mut names: Vec<&str> = Vec::new();
+    for m in &r.modes {
+        for p in &m.passes {
+            if !names.contains(&p.name.as_str()) {
+                names.push(&p.name);
+            }
+        }
+    }
+    for n in names {
+        let find = |m: &ModeReport| m.passes.iter().find(|p| p.name == n).cloned();
+        row(&format!("  {n} (GPU)"), &|m| match find(m) {
+            Some(p) => format!("{} {}", fmt(p.gpu_ms), if p.queue == "compute" { "C" } else { "G" }),
+            None => "-".to_string(),
+        });
+        if r.modes.iter().any(|m| find(m).is_some_and(|p| p.serial_host_ms.is_some())) {
+            row(&format!("  {n} (serial, host)"), &|m| fmt(find(m).and_then(|p| p.serial_host_ms)));
+        }
+    }
+    row("ratio to sync (host mean)", &|m| m.frame_ratio_to_sync.map(|x| format!("{x:.3}")).unwrap_or("-".into()));
+    row("image error vs sync (mean, max)", &|m| {
+        m.image_error_vs_sync
+            .as_ref()
+            .map(|e| format!("{:.2e}, {:.2e}", e.mean_relative, e.max_relative))
+            .unwrap_or("-".into())
+    });
+    row("submits per frame", &|m| format!("{:.1}", m.submits_per_frame));
+    row("host waits: in frame / slot reuse", &|m| format!("{} / {}", m.host_waits.in_frame, m.host_waits.slot_reuse));
+    if ctx.info.is_cpu() {
+        println!(
+            "note: {} is a CPU implementation; its GPU timestamps can be wrong — compare host wall-clock \
+             figures (and --serial-profile for per-pass host times)",
+            ctx.info.name
+        );
+    }
+}
+
+fn write_atomic(path: &Path, bytes: &[u8]) -> dvsgi::Result<()> {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path)).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        usage(format!("{}: could not write: {e}", path.display()))
+    })
 }

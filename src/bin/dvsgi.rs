@@ -3,7 +3,7 @@
 use clap::{Parser, Subcommand};
 use dvsgi::cli::{check_validation, report, CommonArgs};
 use dvsgi::gpu::Context;
-use dvsgi::render::Renderer;
+use dvsgi::render::{Mode, RenderOptions, Renderer};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -48,7 +48,14 @@ enum Command {
         /// Global illumination: none | vct (overrides gi.mode).
         #[arg(long)]
         gi: Option<String>,
-        /// Print the passes, the barriers and timings.
+        /// Queue schedule: sync | async | async-lagged (async-lagged needs earlier frames:
+        /// see --frames).
+        #[arg(long, default_value = "async")]
+        schedule: Mode,
+        /// Frames to render at the same scene time before writing the last one.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+        frames: u32,
+        /// Print the passes, the submits, the barriers and timings.
         #[arg(long, short)]
         verbose: bool,
     },
@@ -68,7 +75,7 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> dvsgi::Result<()> {
     match cli.command {
         Command::Info { scene } => info(&cli.common, scene),
-        Command::Render { scene, out, width, height, time, view, gi, verbose } => {
+        Command::Render { scene, out, width, height, time, view, gi, schedule, frames, verbose } => {
             // Fail on unwritable targets before doing any work.
             for o in &out {
                 dvsgi::output::check_target(o)?;
@@ -92,18 +99,30 @@ fn run(cli: Cli) -> dvsgi::Result<()> {
             let scene = cli.common.load_scene(&scene, &extra)?;
             let ctx = cli.common.context()?;
             let t = scene.settings.time;
-            let mut renderer = Renderer::new(&ctx, scene)?;
+            let options = RenderOptions { mode: schedule, ..RenderOptions::default() };
+            let mut renderer = Renderer::with_options(&ctx, scene, options)?;
+            println!("schedule: {}", schedule_line(&ctx, schedule));
+            for _ in 1..frames {
+                renderer.render(t, false)?;
+            }
             let stats = renderer.render(t, true)?;
             if verbose {
                 println!("device: {} ({})", ctx.info.name, ctx.info.driver_info);
-                let names: Vec<_> = stats.passes.iter().map(|p| p.name.as_str()).collect();
-                println!("passes: {}", names.join(" -> "));
-                for b in &renderer.last_barriers {
-                    println!("  barrier {b}");
+                println!("passes: {}", renderer.last_pass_names().join(" -> "));
+                let sched = renderer.scheduler();
+                for s in sched.submits() {
+                    let wait =
+                        s.wait.map(|w| format!(", waits for {} {w}", s.queue.other().name())).unwrap_or_default();
+                    println!("  submit {} {}{wait}: {}", s.queue.name(), s.signal, s.passes.join(", "));
+                }
+                for b in sched.log() {
+                    println!("  {b}");
                 }
                 println!("frame: {:.2} ms host wall clock (record + submit + wait)", stats.host_ms);
-                for p in &stats.passes {
-                    println!("  {:<20} {:>8.3} ms GPU timestamps", p.name, p.gpu_ms);
+                if let Some(timing) = &stats.timing {
+                    for p in &timing.passes {
+                        println!("  {:<22} {:<8} {:>8.3} ms GPU timestamps", p.name, p.queue.name(), p.gpu_ms());
+                    }
                 }
             }
             check_validation(&ctx)?;
@@ -186,4 +205,12 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
     }
     check_validation(&ctx)?;
     Ok(())
+}
+
+/// The schedule and where its compute work really runs (every output says so).
+fn schedule_line(ctx: &Context, mode: Mode) -> String {
+    match mode {
+        Mode::Sync => "sync (everything on the graphics queue)".to_string(),
+        _ => format!("{mode}, {}", ctx.topology.describe()),
+    }
 }

@@ -634,6 +634,13 @@ impl Context {
         }
     }
 
+    /// The graphics and compute queue families when they differ (resources then need
+    /// ownership transfers or CONCURRENT sharing).
+    pub fn distinct_families(&self) -> Option<[u32; 2]> {
+        (self.graphics_queue.family != self.compute_queue.family)
+            .then_some([self.graphics_queue.family, self.compute_queue.family])
+    }
+
     /// Wait for fences with the global timeout; a timeout or loss is an error, never a hang.
     pub fn wait_fences(&self, fences: &[vk::Fence], what: &str) -> GpuResult<()> {
         match unsafe { self.device.wait_for_fences(fences, true, GPU_TIMEOUT.as_nanos() as u64) } {

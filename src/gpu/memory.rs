@@ -25,13 +25,16 @@ impl Buffer {
     ) -> GpuResult<Buffer> {
         let size = size.max(4);
         let d = &ctx.device;
-        let raw = unsafe {
-            d.create_buffer(
-                &vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE),
-                None,
-            )
-        }
-        .vk("vkCreateBuffer")?;
+        // Buffers are CONCURRENT between distinct graphics and compute families: they are small
+        // (uniforms, lights, geometry) and CONCURRENT costs nothing for them; images stay
+        // EXCLUSIVE and move between families by ownership transfers (render::graph).
+        let families = ctx.distinct_families();
+        let mut info = vk::BufferCreateInfo::default().size(size).usage(usage);
+        info = match &families {
+            Some(f) => info.sharing_mode(vk::SharingMode::CONCURRENT).queue_family_indices(f),
+            None => info.sharing_mode(vk::SharingMode::EXCLUSIVE),
+        };
+        let raw = unsafe { d.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         let req = unsafe { d.get_buffer_memory_requirements(raw) };
         let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
             name,
@@ -56,7 +59,6 @@ impl Buffer {
         Ok(Buffer { ctx: ctx.clone(), raw, allocation: Some(allocation), size, name: name.to_string() })
     }
 
-    /// Host-visible bytes (CpuToGpu / GpuToCpu buffers only).
     /// A host-visible uniform buffer holding `value`.
     pub fn uniform<T: bytemuck::Pod>(ctx: &Arc<Context>, name: &str, value: &T) -> GpuResult<Buffer> {
         let b = Buffer::new(
@@ -70,6 +72,7 @@ impl Buffer {
         Ok(b)
     }
 
+    /// Host-visible bytes (CpuToGpu / GpuToCpu buffers only).
     pub fn mapped(&self) -> Option<&[u8]> {
         self.allocation.as_ref()?.mapped_slice()
     }

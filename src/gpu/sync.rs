@@ -15,7 +15,7 @@ pub enum Access {
     // ----- reads -----
     IndexBuffer,
     VertexBuffer,
-    /// Uniform or storage buffer read by vertex and fragment shaders.
+    /// Uniform or storage buffer read by pre-rasterization (vertex, geometry) and fragment shaders.
     GraphicsShaderReadBuffer,
     /// Uniform or storage buffer read by compute shaders.
     ComputeShaderReadBuffer,
@@ -61,7 +61,8 @@ impl Access {
             Access::IndexBuffer => (S::INDEX_INPUT, A::INDEX_READ, L::UNDEFINED, false),
             Access::VertexBuffer => (S::VERTEX_ATTRIBUTE_INPUT, A::VERTEX_ATTRIBUTE_READ, L::UNDEFINED, false),
             Access::GraphicsShaderReadBuffer => {
-                (S::VERTEX_SHADER | S::FRAGMENT_SHADER, A::SHADER_STORAGE_READ | A::UNIFORM_READ, L::UNDEFINED, false)
+                let stage = S::PRE_RASTERIZATION_SHADERS | S::FRAGMENT_SHADER;
+                (stage, A::SHADER_STORAGE_READ | A::UNIFORM_READ, L::UNDEFINED, false)
             }
             Access::ComputeShaderReadBuffer => {
                 (S::COMPUTE_SHADER, A::SHADER_STORAGE_READ | A::UNIFORM_READ, L::UNDEFINED, false)
@@ -118,6 +119,29 @@ pub struct Barrier {
     pub dst_access: vk::AccessFlags2,
     pub old_layout: vk::ImageLayout,
     pub new_layout: vk::ImageLayout,
+    /// Queue families of an ownership transfer (`QUEUE_FAMILY_IGNORED` when none).
+    pub src_family: u32,
+    pub dst_family: u32,
+}
+
+/// Writes among a set of accesses (for the source side of a barrier).
+pub fn write_mask(accesses: &[Access]) -> vk::AccessFlags2 {
+    combine(accesses).2
+}
+
+/// Stages of a set of accesses.
+pub fn stage_mask(accesses: &[Access]) -> vk::PipelineStageFlags2 {
+    combine(accesses).0
+}
+
+/// Every access bit of a set of accesses (for the destination side of a barrier).
+pub fn access_mask(accesses: &[Access]) -> vk::AccessFlags2 {
+    combine(accesses).1
+}
+
+/// Whether any of `accesses` writes.
+pub fn writes(accesses: &[Access]) -> bool {
+    combine(accesses).3
 }
 
 fn combine(accesses: &[Access]) -> (vk::PipelineStageFlags2, vk::AccessFlags2, vk::AccessFlags2, bool) {
@@ -163,9 +187,21 @@ pub fn layout_of(accesses: &[Access]) -> vk::ImageLayout {
 /// execution dependency; anything after a write needs the write made available and visible;
 /// a layout change is a write and always needs a barrier.
 pub fn barrier(prev: &[Access], next: &[Access], is_image: bool, discard: bool) -> Option<Barrier> {
+    barrier_from(prev, layout_of(prev), next, is_image, discard)
+}
+
+/// [`barrier`] with the image's current layout given explicitly (it may have been changed by
+/// another queue since `prev`).
+pub fn barrier_from(
+    prev: &[Access],
+    layout: vk::ImageLayout,
+    next: &[Access],
+    is_image: bool,
+    discard: bool,
+) -> Option<Barrier> {
     let (src_stage, _src_all, src_writes, prev_writes) = combine(prev);
     let (dst_stage, dst_all, _dst_writes, next_writes) = combine(next);
-    let old_layout = if discard || !is_image { vk::ImageLayout::UNDEFINED } else { layout_of(prev) };
+    let old_layout = if discard || !is_image { vk::ImageLayout::UNDEFINED } else { layout };
     let new_layout = if is_image { layout_of(next) } else { vk::ImageLayout::UNDEFINED };
     let layout_change = is_image && (old_layout != new_layout || (discard && new_layout != vk::ImageLayout::UNDEFINED));
     let prev_empty = prev.iter().all(|a| *a == Access::Nothing);
@@ -179,7 +215,16 @@ pub fn barrier(prev: &[Access], next: &[Access], is_image: bool, discard: bool) 
     // Write-after-read: an execution dependency suffices unless a layout transition
     // (itself a write) or a previous write must be made visible.
     let dst_access = if prev_writes || layout_change { dst_all } else { vk::AccessFlags2::NONE };
-    Some(Barrier { src_stage, src_access: src_writes, dst_stage, dst_access, old_layout, new_layout })
+    Some(Barrier {
+        src_stage,
+        src_access: src_writes,
+        dst_stage,
+        dst_access,
+        old_layout,
+        new_layout,
+        src_family: vk::QUEUE_FAMILY_IGNORED,
+        dst_family: vk::QUEUE_FAMILY_IGNORED,
+    })
 }
 
 impl Barrier {
@@ -191,8 +236,8 @@ impl Barrier {
             .dst_access_mask(self.dst_access)
             .old_layout(self.old_layout)
             .new_layout(self.new_layout)
-            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .src_queue_family_index(self.src_family)
+            .dst_queue_family_index(self.dst_family)
             .image(image)
             .subresource_range(range)
     }
@@ -211,8 +256,8 @@ impl Barrier {
             .src_access_mask(self.src_access)
             .dst_stage_mask(self.dst_stage)
             .dst_access_mask(self.dst_access)
-            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .src_queue_family_index(self.src_family)
+            .dst_queue_family_index(self.dst_family)
             .buffer(buffer)
             .offset(0)
             .size(vk::WHOLE_SIZE)

@@ -8,6 +8,7 @@ use super::passes::lighting::{GiInputs, LightingOutput, LightingPass};
 use super::passes::readback::ReadbackPasses;
 use super::passes::shadow::ShadowPass;
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
+use super::passes::upload::UploadPass;
 use super::passes::voxel_bounce::VoxelBouncePass;
 use super::passes::voxel_clear::{DynamicClearPass, VoxelClearPass};
 use super::passes::voxel_light::VoxelLightPass;
@@ -63,6 +64,8 @@ pub enum Shading {
 
 /// Every pass the scene needs, created once.
 pub struct FramePasses {
+    /// Writes the frame's host data (uniforms, lights, shadow views, instances).
+    pub upload: UploadPass,
     pub voxels: Option<VoxelPasses>,
     /// Only when some light casts shadows that are resolved with shadow maps.
     pub shadow: Option<ShadowPass>,
@@ -86,6 +89,9 @@ pub struct FrameState {
     pub relight: bool,
     /// Copy the outputs for the host.
     pub readback: bool,
+    /// `async-lagged`: trace cones through the voxel radiance of the previous update and
+    /// relight the voxels after the trace (only once a previous update exists).
+    pub lagged: bool,
 }
 
 pub const RADIANCE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -220,7 +226,14 @@ impl FramePasses {
         };
         let shadow =
             if shadow_views > 0 { Some(ShadowPass::new(ctx, scene_gpu, frame, &atlas, shadow_views)?) } else { None };
+        let upload = UploadPass::new(vec![
+            frame.uniforms.clone(),
+            frame.lights.clone(),
+            frame.shadow_views.clone(),
+            scene_gpu.instances.clone(),
+        ]);
         Ok(FramePasses {
+            upload,
             voxels,
             shadow,
             gbuffer: GBufferPass::new(ctx, scene_gpu, frame, &gbuffer)?,
@@ -257,9 +270,10 @@ impl FramePasses {
         Ok(())
     }
 
-    /// The frame, in dependency order.
+    /// The frame, in dependency order. Every schedule mode runs this list; the scheduler
+    /// only decides which queue each pass goes to.
     pub fn list(&self, state: FrameState) -> Vec<&dyn Pass> {
-        let mut passes: Vec<&dyn Pass> = Vec::new();
+        let mut passes: Vec<&dyn Pass> = vec![&self.upload];
         if let Some(v) = &self.voxels {
             if !state.static_voxelized {
                 passes.push(&v.clear);
@@ -281,16 +295,24 @@ impl FramePasses {
                 passes.push(shadow);
             }
         }
+        // The voxel illumination chain: direct light, mips, bounces (each with its mips).
+        let mut voxel_lighting: Vec<&dyn Pass> = Vec::new();
         if let (true, Some(v)) = (relight, &self.voxels) {
-            passes.push(&v.light);
+            voxel_lighting.push(&v.light);
             if let Some(mips) = &v.mips {
-                passes.push(mips);
+                voxel_lighting.push(mips);
             }
             for i in 0..v.volumes.needs.bounces {
                 let (bounce, mips) = &v.bounces[bounce_step(i)];
-                passes.push(bounce);
-                passes.push(mips);
+                voxel_lighting.push(bounce);
+                voxel_lighting.push(mips);
             }
+        }
+        // Lagged: this frame's cones read the radiance of the previous update, and the new
+        // radiance is computed after them (overlapping the rest of the frame's graphics work).
+        let lagged = state.lagged && state.static_voxelized && self.cones.is_some();
+        if !lagged {
+            passes.append(&mut voxel_lighting);
         }
         match &self.shading {
             Shading::Lighting(lighting) => {
@@ -313,6 +335,7 @@ impl FramePasses {
             passes.push(&r.display);
             passes.push(&r.host);
         }
+        passes.append(&mut voxel_lighting);
         passes
     }
 }

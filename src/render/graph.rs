@@ -1,12 +1,11 @@
 //! Passes declare what they read and write; the recorder derives every barrier from those
 //! declarations (see `gpu::sync`) and wraps each pass in a debug label and GPU timestamps.
 
-use crate::gpu::sync::{barrier, Access};
-use crate::gpu::{Buffer, Context, GpuResult, Image, VkContext};
+use crate::gpu::sync::{access_mask, barrier_from, layout_of, stage_mask, write_mask, writes, Access, Barrier};
+use crate::gpu::{Buffer, Context, Image};
 use ash::vk;
 use ash::vk::Handle;
 use std::collections::HashMap;
-use std::sync::Arc;
 
 /// A resource a pass touches.
 #[derive(Clone, Copy)]
@@ -59,28 +58,137 @@ pub trait Pass {
     /// Everything this pass reads or writes that another pass may also touch.
     /// (Immutable scene data uploaded at load time is not listed.)
     fn uses(&self) -> Vec<Use<'_>>;
+    /// The queue this work belongs to in the async modes (graphics unless overridden).
+    fn queue(&self) -> QueueKind {
+        QueueKind::Graphics
+    }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer);
 }
 
-/// The last accesses of every resource seen, carried from pass to pass and frame to frame.
-#[derive(Default)]
-pub struct StateTracker {
-    state: HashMap<u64, Vec<Access>>,
+/// The queue a pass's work belongs to. In `sync` mode every pass runs on the graphics queue;
+/// in the async modes compute passes run on the compute queue (see `render::schedule`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum QueueKind {
+    Graphics,
+    Compute,
 }
 
-/// Barriers collected before one pass.
-#[derive(Default)]
-pub struct PendingBarriers {
-    pub images: Vec<vk::ImageMemoryBarrier2<'static>>,
-    pub buffers: Vec<vk::BufferMemoryBarrier2<'static>>,
+impl QueueKind {
+    pub const ALL: [QueueKind; 2] = [QueueKind::Graphics, QueueKind::Compute];
+    pub fn index(self) -> usize {
+        self as usize
+    }
+    pub fn other(self) -> QueueKind {
+        match self {
+            QueueKind::Graphics => QueueKind::Compute,
+            QueueKind::Compute => QueueKind::Graphics,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            QueueKind::Graphics => "graphics",
+            QueueKind::Compute => "compute",
+        }
+    }
+}
+
+/// A tracked resource: its identity and whether it is an image (layouts, ownership).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct ResKey {
+    pub id: u64,
+    pub is_image: bool,
+}
+
+impl Res<'_> {
+    pub fn res_key(&self) -> ResKey {
+        ResKey { id: self.key(), is_image: matches!(self, Res::Image(_)) }
+    }
+}
+
+/// What the tracker knows of one resource across both queues.
+#[derive(Debug, Clone, PartialEq)]
+struct ResState {
+    /// Current image layout (`UNDEFINED` before the first use).
+    layout: vk::ImageLayout,
+    /// The queue whose family owns the image (meaningful when the families differ).
+    owner: Option<QueueKind>,
+    /// The queue of the last write (a layout transition counts as a write).
+    writer: Option<QueueKind>,
+    /// Per queue: the last write there (or the accesses that performed the last layout
+    /// transition there), still to be made visible to reads in other stages.
+    write: [Vec<Access>; 2],
+    /// Per queue: reads since that write, already made visible.
+    reads: [Vec<Access>; 2],
+    /// Per queue: timeline value of the batch with the latest access there.
+    val: [u64; 2],
+}
+
+impl Default for ResState {
+    fn default() -> Self {
+        ResState {
+            layout: vk::ImageLayout::UNDEFINED,
+            owner: None,
+            writer: None,
+            write: [vec![], vec![]],
+            reads: [vec![], vec![]],
+            val: [0, 0],
+        }
+    }
+}
+
+impl ResState {
+    fn touched(&self, q: QueueKind) -> bool {
+        !self.write[q.index()].is_empty() || !self.reads[q.index()].is_empty()
+    }
+    /// Every access on `q` a barrier there must wait for.
+    fn all(&self, q: QueueKind) -> Vec<Access> {
+        let mut v = self.write[q.index()].clone();
+        for a in &self.reads[q.index()] {
+            if !v.contains(a) {
+                v.push(*a);
+            }
+        }
+        if v.is_empty() {
+            v.push(Access::Nothing);
+        }
+        v
+    }
+}
+
+/// What one pass needs before it runs, worked out from its declared uses.
+#[derive(Debug, Default)]
+pub struct Transition {
+    /// The other queue's timeline value this pass must wait for (a semaphore wait), if any.
+    pub wait: Option<u64>,
+    /// Barriers recorded on the pass's queue just before it (acquire halves included).
+    pub barriers: Vec<(ResKey, Barrier)>,
+    /// Release halves of queue-family ownership transfers: recorded at the end of the other
+    /// queue's open batch, which the pass then waits for.
+    pub releases: Vec<(ResKey, Barrier)>,
     /// Human-readable description, for `--verbose` and tests.
     pub log: Vec<String>,
+    /// New states, committed with the timeline value of the batch the pass lands in.
+    updates: Vec<(ResKey, ResState)>,
+}
+
+/// The last accesses of every resource on each queue, carried from pass to pass and frame to
+/// frame: the source of every barrier, semaphore wait and ownership transfer.
+#[derive(Default)]
+pub struct StateTracker {
+    state: HashMap<ResKey, ResState>,
+    /// Queue family per [`QueueKind`] when the two differ (ownership transfers are needed).
+    families: Option<[u32; 2]>,
 }
 
 impl StateTracker {
-    /// Barriers needed before a pass with these uses; updates the tracked state.
-    pub fn transition(&mut self, uses: &[Use]) -> PendingBarriers {
-        let mut out = PendingBarriers::default();
+    /// `families`: the graphics and compute families when they differ.
+    pub fn new(families: Option<[u32; 2]>) -> StateTracker {
+        StateTracker { state: HashMap::new(), families }
+    }
+
+    /// Plan a pass on `queue` with these uses (state is updated by [`StateTracker::commit`]).
+    pub fn plan(&self, uses: &[Use], queue: QueueKind) -> Transition {
         // Merge multiple uses of the same resource in one pass.
         let mut merged: Vec<(Res, Vec<Access>, bool)> = Vec::new();
         for u in uses {
@@ -92,155 +200,247 @@ impl StateTracker {
                 None => merged.push((u.res, vec![u.access], u.discard)),
             }
         }
+        let mut t = Transition::default();
         for (res, next, discard) in merged {
-            let prev = self.state.get(&res.key()).cloned().unwrap_or_else(|| vec![Access::Nothing]);
-            let is_image = matches!(res, Res::Image(_));
-            if let Some(b) = barrier(&prev, &next, is_image, discard) {
-                out.log.push(format!(
-                    "{}: {:?} -> {:?} ({:?} -> {:?})",
-                    res.name(),
-                    prev,
-                    next,
-                    b.old_layout,
-                    b.new_layout
-                ));
-                match res {
-                    Res::Image(img) => out.images.push(b.image(img.raw, img.desc.full_range())),
-                    Res::Buffer(buf) => out.buffers.push(b.buffer(buf.raw)),
+            self.plan_one(&mut t, res.res_key(), res.name(), &next, discard, queue);
+        }
+        t
+    }
+
+    /// The core of [`StateTracker::plan`] for one resource (GPU-free, unit-tested).
+    ///
+    /// On the pass's own queue: a write waits for every earlier access there and makes its
+    /// predecessor write visible; a read needs a barrier only if its stage and access have
+    /// not yet been given the last write; a layout change is a write. Across queues: any
+    /// hazard with the other queue's accesses (it wrote, this pass writes, the layout or
+    /// the owning family changes) is a semaphore wait for the other queue's batch, plus an
+    /// ownership transfer (release there, acquire here) when the families differ.
+    pub fn plan_one(&self, t: &mut Transition, key: ResKey, name: &str, next: &[Access], discard: bool, q: QueueKind) {
+        let st = self.state.get(&key).cloned().unwrap_or_default();
+        let o = q.other();
+        let (qi, oi) = (q.index(), o.index());
+        let next_layout = if key.is_image { layout_of(next) } else { vk::ImageLayout::UNDEFINED };
+        let layout_change =
+            key.is_image && next_layout != vk::ImageLayout::UNDEFINED && (discard || next_layout != st.layout);
+        let next_writes = writes(next);
+        let transfer = key.is_image && self.families.is_some() && st.owner == Some(o) && !discard;
+        let cross = st.touched(o) && (st.writer == Some(o) || next_writes || layout_change || transfer);
+        let prev_q = st.all(q);
+        let same = if next_writes || layout_change {
+            barrier_from(&prev_q, st.layout, next, key.is_image, discard)
+        } else if !st.write[qi].is_empty() && next.iter().any(|a| !st.reads[qi].contains(a)) {
+            barrier_from(&st.write[qi], st.layout, next, key.is_image, false)
+        } else {
+            None
+        };
+        if cross {
+            let new_layout = if next_layout == vk::ImageLayout::UNDEFINED { st.layout } else { next_layout };
+            let old_layout = if discard { vk::ImageLayout::UNDEFINED } else { st.layout };
+            // The acquire (or plain) barrier chains to the semaphore wait (ALL_COMMANDS) and
+            // also covers this queue's own earlier accesses.
+            let mut b = Barrier {
+                src_stage: vk::PipelineStageFlags2::ALL_COMMANDS,
+                src_access: write_mask(&prev_q),
+                dst_stage: stage_mask(next),
+                dst_access: access_mask(next),
+                old_layout,
+                new_layout,
+                src_family: vk::QUEUE_FAMILY_IGNORED,
+                dst_family: vk::QUEUE_FAMILY_IGNORED,
+            };
+            if transfer {
+                let fam = self.families.expect("families differ");
+                b.src_family = fam[oi];
+                b.dst_family = fam[qi];
+                let prev_o = st.all(o);
+                let release = Barrier {
+                    src_stage: stage_mask(&prev_o),
+                    src_access: write_mask(&prev_o),
+                    dst_stage: vk::PipelineStageFlags2::NONE,
+                    dst_access: vk::AccessFlags2::NONE,
+                    ..b
+                };
+                b.src_access = vk::AccessFlags2::NONE;
+                t.releases.push((key, release));
+                t.log.push(format!("{name}: release {} -> {} ({old_layout:?} -> {new_layout:?})", o.name(), q.name()));
+            }
+            t.wait = t.wait.max(Some(st.val[oi]));
+            t.log.push(format!("{name}: wait for {} {} ({:?} then {next:?})", o.name(), st.val[oi], st.all(o)));
+            if transfer || layout_change || same.is_some() {
+                t.log.push(format!("{name}: {prev_q:?} -> {next:?} ({old_layout:?} -> {new_layout:?})"));
+                t.barriers.push((key, b));
+            }
+        } else if let Some(b) = same {
+            t.log.push(format!("{name}: {prev_q:?} -> {next:?} ({:?} -> {:?})", b.old_layout, b.new_layout));
+            t.barriers.push((key, b));
+        }
+        let mut new = st.clone();
+        if key.is_image && next_layout != vk::ImageLayout::UNDEFINED {
+            new.layout = next_layout;
+        }
+        if key.is_image && (new.owner.is_none() || transfer || discard) {
+            new.owner = Some(q);
+        }
+        if next_writes || layout_change || transfer {
+            // A write (or a layout transition): everything before it is ordered before it.
+            new.writer = Some(q);
+            new.write = [vec![], vec![]];
+            new.reads = [vec![], vec![]];
+            new.write[qi] = next.to_vec();
+            if !next_writes {
+                new.reads[qi] = next.to_vec();
+            }
+        } else {
+            for a in next {
+                if !new.reads[qi].contains(a) {
+                    new.reads[qi].push(*a);
                 }
             }
-            self.state.insert(res.key(), next);
         }
-        out
+        t.updates.push((key, new));
+    }
+
+    /// Record the planned states, with `value` the timeline value of the pass's batch.
+    pub fn commit(&mut self, t: &mut Transition, queue: QueueKind, value: u64) {
+        for (key, mut st) in t.updates.drain(..) {
+            st.val[queue.index()] = value;
+            self.state.insert(key, st);
+        }
     }
 }
 
-impl PendingBarriers {
-    pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
-        if self.images.is_empty() && self.buffers.is_empty() {
-            return;
-        }
-        let dep =
-            vk::DependencyInfo::default().image_memory_barriers(&self.images).buffer_memory_barriers(&self.buffers);
-        unsafe { ctx.device.cmd_pipeline_barrier2(cmd, &dep) };
+/// Record barriers on a command buffer (images looked up by key in `uses`).
+pub fn record_barriers(ctx: &Context, cmd: vk::CommandBuffer, barriers: &[(ResKey, Barrier)], uses: &[Use]) {
+    if barriers.is_empty() {
+        return;
     }
+    let mut images = Vec::new();
+    let mut buffers = Vec::new();
+    for (key, b) in barriers {
+        let Some(u) = uses.iter().find(|u| u.res.res_key() == *key) else { continue };
+        match u.res {
+            Res::Image(img) => images.push(b.image(img.raw, img.desc.full_range())),
+            Res::Buffer(buf) => buffers.push(b.buffer(buf.raw)),
+        }
+    }
+    let dep = vk::DependencyInfo::default().image_memory_barriers(&images).buffer_memory_barriers(&buffers);
+    unsafe { ctx.device.cmd_pipeline_barrier2(cmd, &dep) };
 }
 
-/// GPU timestamps around each pass.
-pub struct PassTimer {
-    ctx: Arc<Context>,
-    pool: vk::QueryPool,
-    capacity: u32,
-    names: Vec<String>,
-    valid: bool,
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use vk::ImageLayout as L;
+    use vk::PipelineStageFlags2 as S;
+    use Access::*;
+    use QueueKind::{Compute as C, Graphics as G};
 
-/// One pass's GPU time.
-#[derive(Debug, Clone)]
-pub struct PassTime {
-    pub name: String,
-    pub gpu_ms: f64,
-}
+    const IMG: ResKey = ResKey { id: 1, is_image: true };
+    const BUF: ResKey = ResKey { id: 2, is_image: false };
 
-impl PassTimer {
-    pub fn new(ctx: &Arc<Context>, max_passes: u32) -> GpuResult<PassTimer> {
-        let capacity = max_passes * 2;
-        let pool = unsafe {
-            ctx.device.create_query_pool(
-                &vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(capacity),
-                None,
-            )
-        }
-        .vk("vkCreateQueryPool")?;
-        ctx.name_object(pool, "pass timestamps");
-        let valid = ctx
-            .info
-            .families
-            .get(ctx.graphics_queue.family as usize)
-            .map(|f| f.timestamp_valid_bits > 0)
-            .unwrap_or(false);
-        Ok(PassTimer { ctx: ctx.clone(), pool, capacity, names: Vec::new(), valid })
+    /// Plan and commit one use; returns the transition.
+    fn use_(
+        tr: &mut StateTracker,
+        key: ResKey,
+        next: &[Access],
+        discard: bool,
+        q: QueueKind,
+        value: u64,
+    ) -> Transition {
+        let mut t = Transition::default();
+        tr.plan_one(&mut t, key, "r", next, discard, q);
+        tr.commit(&mut t, q, value);
+        t
     }
 
-    fn begin_frame(&mut self, cmd: vk::CommandBuffer) {
-        self.names.clear();
-        unsafe { self.ctx.device.cmd_reset_query_pool(cmd, self.pool, 0, self.capacity) };
+    #[test]
+    fn same_queue_uses_need_barriers_only() {
+        let mut tr = StateTracker::new(None);
+        let t = use_(&mut tr, IMG, &[ColorAttachmentWrite], true, G, 1);
+        assert_eq!(t.wait, None);
+        assert_eq!(t.barriers.len(), 1);
+        let t = use_(&mut tr, IMG, &[ComputeShaderReadSampled], false, G, 1);
+        assert_eq!(t.wait, None);
+        assert_eq!(t.barriers[0].1.new_layout, L::SHADER_READ_ONLY_OPTIMAL);
     }
 
-    fn stamp(&mut self, cmd: vk::CommandBuffer, index: u32) {
-        if index < self.capacity {
-            unsafe {
-                self.ctx.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, index)
-            };
-        }
+    #[test]
+    fn write_on_graphics_read_on_compute_waits_and_transitions_there() {
+        let mut tr = StateTracker::new(None);
+        use_(&mut tr, IMG, &[ColorAttachmentWrite], true, G, 3);
+        let t = use_(&mut tr, IMG, &[ComputeShaderReadSampled], false, C, 1);
+        assert_eq!(t.wait, Some(3), "waits for the graphics batch that wrote it");
+        assert!(t.releases.is_empty(), "one family: no ownership transfer");
+        let b = t.barriers[0].1;
+        assert_eq!((b.old_layout, b.new_layout), (L::COLOR_ATTACHMENT_OPTIMAL, L::SHADER_READ_ONLY_OPTIMAL));
+        assert_eq!(b.src_stage, S::ALL_COMMANDS, "chains to the semaphore wait");
+        assert_eq!(b.src_family, vk::QUEUE_FAMILY_IGNORED);
+        // Read again on graphics in the same layout: the compute transition was a write, so
+        // graphics waits for it too.
+        let t = use_(&mut tr, IMG, &[ComputeShaderReadSampled], false, G, 4);
+        assert_eq!(t.wait, Some(1));
     }
 
-    /// Read the timestamps of the last recorded frame (call after its fence signalled).
-    pub fn read(&self) -> GpuResult<Vec<PassTime>> {
-        let n = (self.names.len() as u32 * 2).min(self.capacity);
-        if n == 0 || !self.valid {
-            return Ok(Vec::new());
-        }
-        let mut data = vec![[0u64; 2]; n as usize];
-        unsafe {
-            self.ctx.device.get_query_pool_results(
-                self.pool,
-                0,
-                &mut data,
-                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WITH_AVAILABILITY,
-            )
-        }
-        .vk("vkGetQueryPoolResults")?;
-        let period = self.ctx.info.timestamp_period_ns as f64;
-        Ok(self
-            .names
-            .iter()
-            .enumerate()
-            .filter_map(|(i, name)| {
-                let (b, e) = (data[2 * i], data[2 * i + 1]);
-                (b[1] != 0 && e[1] != 0)
-                    .then(|| PassTime { name: name.clone(), gpu_ms: e[0].saturating_sub(b[0]) as f64 * period * 1e-6 })
-            })
-            .collect())
+    #[test]
+    fn reads_on_both_queues_do_not_wait_for_each_other() {
+        let mut tr = StateTracker::new(None);
+        use_(&mut tr, BUF, &[TransferWrite], false, G, 1);
+        let t = use_(&mut tr, BUF, &[ComputeShaderReadBuffer], false, C, 1);
+        assert_eq!(t.wait, Some(1));
+        assert!(t.barriers.is_empty(), "the semaphore makes the write visible; buffers have no layout");
+        // Graphics reads the same data: ordered after its own write by a barrier, no wait.
+        let t = use_(&mut tr, BUF, &[GraphicsShaderReadBuffer], false, G, 2);
+        assert_eq!(t.wait, None);
+        assert_eq!(t.barriers.len(), 1);
+        // The next frame's upload waits for the compute read (write after read).
+        let t = use_(&mut tr, BUF, &[TransferWrite], false, G, 3);
+        assert_eq!(t.wait, Some(1));
     }
-}
 
-impl Drop for PassTimer {
-    fn drop(&mut self) {
-        unsafe { self.ctx.device.destroy_query_pool(self.pool, None) };
+    #[test]
+    fn a_write_is_made_visible_to_each_new_reading_stage_once() {
+        let mut tr = StateTracker::new(None);
+        use_(&mut tr, BUF, &[TransferWrite], false, G, 1);
+        let t = use_(&mut tr, BUF, &[GraphicsShaderReadBuffer], false, G, 1);
+        assert_eq!(t.barriers[0].1.src_access, vk::AccessFlags2::TRANSFER_WRITE);
+        let t = use_(&mut tr, BUF, &[ComputeShaderReadBuffer], false, G, 1);
+        assert_eq!(t.barriers.len(), 1, "a new stage needs the write too");
+        assert_eq!(t.barriers[0].1.src_stage, S::COPY | S::CLEAR, "from the write, not the reads");
+        let t = use_(&mut tr, BUF, &[GraphicsShaderReadBuffer], false, G, 1);
+        assert!(t.barriers.is_empty(), "already visible there");
+        let t = use_(&mut tr, BUF, &[TransferWrite], false, G, 2);
+        let b = t.barriers[0].1;
+        assert!(b.src_stage.contains(S::COMPUTE_SHADER | S::FRAGMENT_SHADER), "waits for every read");
     }
-}
 
-/// Record `passes` in order into `cmd`: barriers from declarations, a debug label and
-/// timestamps around each. Returns the barrier log.
-pub fn record_passes(
-    ctx: &Context,
-    cmd: vk::CommandBuffer,
-    tracker: &mut StateTracker,
-    mut timer: Option<&mut PassTimer>,
-    passes: &[&dyn Pass],
-) -> Vec<String> {
-    let mut log = Vec::new();
-    if let Some(t) = timer.as_deref_mut() {
-        t.begin_frame(cmd);
+    #[test]
+    fn distinct_families_transfer_ownership_with_matching_halves() {
+        let mut tr = StateTracker::new(Some([0, 2]));
+        use_(&mut tr, IMG, &[ComputeShaderWrite], true, C, 5);
+        let t = use_(&mut tr, IMG, &[ComputeShaderReadStorage], false, G, 7);
+        assert_eq!(t.wait, Some(5));
+        let (r, a) = (t.releases[0].1, t.barriers[0].1);
+        assert_eq!((r.src_family, r.dst_family), (2, 0));
+        assert_eq!((a.src_family, a.dst_family), (2, 0));
+        assert_eq!((r.old_layout, r.new_layout), (a.old_layout, a.new_layout));
+        assert_eq!(r.src_access, vk::AccessFlags2::SHADER_STORAGE_WRITE | vk::AccessFlags2::SHADER_STORAGE_READ);
+        assert_eq!(r.dst_stage, S::NONE);
+        assert_eq!(a.src_access, vk::AccessFlags2::NONE);
+        assert_eq!(a.dst_stage, S::COMPUTE_SHADER);
+        // Back to compute, overwriting: no transfer (contents discarded), but a wait (WAR).
+        let t = use_(&mut tr, IMG, &[ComputeShaderWrite], true, C, 6);
+        assert_eq!(t.wait, Some(7));
+        assert!(t.releases.is_empty());
+        assert_eq!(t.barriers[0].1.old_layout, L::UNDEFINED);
+        assert_eq!(t.barriers[0].1.src_family, vk::QUEUE_FAMILY_IGNORED);
     }
-    for pass in passes {
-        let uses = pass.uses();
-        let barriers = tracker.transition(&uses);
-        barriers.record(ctx, cmd);
-        log.extend(barriers.log.iter().map(|l| format!("before {}: {l}", pass.name())));
-        ctx.begin_label(cmd, pass.name());
-        let slot = timer.as_deref_mut().map(|t| {
-            let i = t.names.len() as u32;
-            t.names.push(pass.name().to_string());
-            t.stamp(cmd, 2 * i);
-            i
-        });
-        pass.record(ctx, cmd);
-        if let (Some(t), Some(i)) = (timer.as_deref_mut(), slot) {
-            t.stamp(cmd, 2 * i + 1);
-        }
-        ctx.end_label(cmd);
+
+    #[test]
+    fn same_family_second_queue_never_transfers() {
+        let mut tr = StateTracker::new(None);
+        use_(&mut tr, IMG, &[ComputeShaderWrite], true, C, 1);
+        let t = use_(&mut tr, IMG, &[ComputeShaderReadStorage], false, G, 1);
+        assert!(t.releases.is_empty());
+        assert_eq!(t.wait, Some(1));
     }
-    log
 }

@@ -7,16 +7,18 @@ pub mod graph;
 pub mod lights;
 pub mod passes;
 pub mod scene_gpu;
+pub mod schedule;
 pub mod voxel;
 
-use crate::gpu::{Buffer, Context, GpuError, GpuResult, VkContext};
+use crate::gpu::{Access, Buffer, Context, GpuError, GpuResult};
 use crate::scene::{GiMode, Scene, ToneMap, View, VoxelOcclusion};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use frame::{FramePasses, FrameState};
 use gpu_allocator::MemoryLocation;
-use graph::{PassTime, PassTimer, StateTracker};
+use graph::Use;
 use scene_gpu::SceneGpu;
+pub use schedule::{FrameTiming, HostWaits, Mode, PassTime, Scheduler, SerialTime, SubmitRecord};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -33,11 +35,24 @@ pub struct FrameUniforms {
     pub shadow: [f32; 4],
 }
 
-/// Host-written per-frame data, shared by the passes.
+/// Per-frame data from the host, shared by the passes. The buffers are device-local and
+/// written by the frame's upload pass (`passes::upload`), so frames in flight each see their own.
+#[derive(Clone)]
 pub struct FrameBuffers {
-    pub uniforms: Buffer,
-    pub lights: Buffer,
-    pub shadow_views: Buffer,
+    pub uniforms: Arc<Buffer>,
+    pub lights: Arc<Buffer>,
+    pub shadow_views: Arc<Buffer>,
+}
+
+impl FrameBuffers {
+    /// The declared reads of the per-frame data by a pass's shaders.
+    pub fn reads(&self, access: Access) -> Vec<Use<'_>> {
+        vec![
+            Use::buffer(&self.uniforms, access),
+            Use::buffer(&self.lights, access),
+            Use::buffer(&self.shadow_views, access),
+        ]
+    }
 }
 
 /// The rendered frame read back to the host.
@@ -58,24 +73,37 @@ impl FrameOutput {
     }
 }
 
-/// Timing of one frame: host wall clock around record+submit+wait, and GPU timestamps.
+/// What `render` reports about a frame.
 #[derive(Debug, Clone)]
 pub struct FrameStats {
+    pub frame: u64,
+    /// Host wall clock of `render`: slot wait, record, submit (and the wait for a read-back frame).
     pub host_ms: f64,
-    pub passes: Vec<PassTime>,
+    /// GPU timestamps, present when the frame was waited for (read back); otherwise they
+    /// arrive later through [`Renderer::take_timings`].
+    pub timing: Option<FrameTiming>,
+}
+
+/// How frames are scheduled.
+#[derive(Debug, Clone, Copy)]
+pub struct RenderOptions {
+    pub mode: Mode,
+    /// Frames recorded ahead of the GPU (1: the host waits for each frame before the next).
+    pub frames_in_flight: u32,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions { mode: Mode::Async, frames_in_flight: 2 }
+    }
 }
 
 pub struct Renderer {
     pub ctx: Arc<Context>,
     pub scene: Scene,
     scene_gpu: Arc<SceneGpu>,
-    frame_buffers: FrameBuffers,
     passes: FramePasses,
-    tracker: StateTracker,
-    timer: PassTimer,
-    pool: vk::CommandPool,
-    cmd: vk::CommandBuffer,
-    fence: vk::Fence,
+    scheduler: Scheduler,
     width: u32,
     height: u32,
     /// Static geometry has been voxelized (by a completed frame).
@@ -88,14 +116,20 @@ pub struct Renderer {
     last_lights: Vec<u8>,
     /// Whether the next frame relights (lights changed since the last relight).
     lights_changed: bool,
-    /// Barriers of the last recorded frame, described (for `--verbose` and tests).
-    pub last_barriers: Vec<String>,
     /// Passes of the last rendered frame, in order.
     last_passes: Vec<String>,
 }
 
 impl Renderer {
+    /// A renderer with the default options (async, two frames in flight).
     pub fn new(ctx: &Arc<Context>, scene: Scene) -> GpuResult<Renderer> {
+        Renderer::with_options(ctx, scene, RenderOptions::default())
+    }
+
+    pub fn with_options(ctx: &Arc<Context>, scene: Scene, options: RenderOptions) -> GpuResult<Renderer> {
+        if options.frames_in_flight == 0 || options.frames_in_flight > 8 {
+            return Err(GpuError::Limit(format!("frames in flight must be 1..=8, not {}", options.frames_in_flight)));
+        }
         let s = &scene.settings;
         let (width, height) = (s.width, s.height);
         let max2d = ctx.info.limits.max_image_dimension2_d;
@@ -117,23 +151,26 @@ impl Renderer {
                 ctx,
                 "frame uniforms",
                 std::mem::size_of::<FrameUniforms>() as u64,
-                vk::BufferUsageFlags::UNIFORM_BUFFER,
-                MemoryLocation::CpuToGpu,
-            )?,
+                vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuOnly,
+            )?
+            .into(),
             lights: Buffer::new(
                 ctx,
                 "lights",
                 (scene.lights.len().max(1) * std::mem::size_of::<lights::GpuLight>()) as u64,
-                vk::BufferUsageFlags::STORAGE_BUFFER,
-                MemoryLocation::CpuToGpu,
-            )?,
+                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuOnly,
+            )?
+            .into(),
             shadow_views: Buffer::new(
                 ctx,
                 "shadow views",
                 (shadow_views.max(1) as usize * std::mem::size_of::<lights::GpuShadowView>()) as u64,
-                vk::BufferUsageFlags::STORAGE_BUFFER,
-                MemoryLocation::CpuToGpu,
-            )?,
+                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuOnly,
+            )?
+            .into(),
         };
         // Shadow maps only where something samples them: direct light (unless cones shadow
         // every shadowed light) or voxel lighting with shadow-map occlusion.
@@ -142,29 +179,13 @@ impl Renderer {
         let voxel_maps = voxel_lighting && s.gi.occlusion == VoxelOcclusion::ShadowMap;
         let map_views = if direct_maps || voxel_maps { shadow_views } else { 0 };
         let passes = FramePasses::new(ctx, &scene, &scene_gpu, &frame_buffers, map_views)?;
-        let timer = PassTimer::new(ctx, 128)?;
-        let d = &ctx.device;
-        let pool = unsafe {
-            d.create_command_pool(
-                &vk::CommandPoolCreateInfo::default()
-                    .queue_family_index(ctx.graphics_queue.family)
-                    .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
-                None,
-            )
-        }
-        .vk("vkCreateCommandPool")?;
-        ctx.name_object(pool, "frame command pool");
-        let mut me = Renderer {
+        let scheduler = Scheduler::new(ctx, options.mode, options.frames_in_flight)?;
+        Ok(Renderer {
             ctx: ctx.clone(),
             scene,
             scene_gpu,
-            frame_buffers,
             passes,
-            tracker: StateTracker::default(),
-            timer,
-            pool,
-            cmd: vk::CommandBuffer::null(),
-            fence: vk::Fence::null(),
+            scheduler,
             width,
             height,
             static_voxelized: false,
@@ -172,22 +193,8 @@ impl Renderer {
             update_requested: false,
             last_lights: Vec::new(),
             lights_changed: true,
-            last_barriers: Vec::new(),
             last_passes: Vec::new(),
-        };
-        me.cmd = unsafe {
-            d.allocate_command_buffers(
-                &vk::CommandBufferAllocateInfo::default()
-                    .command_pool(pool)
-                    .level(vk::CommandBufferLevel::PRIMARY)
-                    .command_buffer_count(1),
-            )
-        }
-        .vk("vkAllocateCommandBuffers")?[0];
-        ctx.name_object(me.cmd, "frame commands");
-        me.fence = unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
-        ctx.name_object(me.fence, "frame fence");
-        Ok(me)
+        })
     }
 
     pub fn size(&self) -> (u32, u32) {
@@ -208,6 +215,7 @@ impl Renderer {
             revoxelize: due,
             relight: due || self.lights_changed,
             readback,
+            lagged: self.scheduler.mode() == Mode::AsyncLagged,
         }
     }
 
@@ -242,9 +250,42 @@ impl Renderer {
         let ctx = self.ctx.clone();
         let copy = passes::readback::ImageDownload::level(&ctx, image, level)?;
         let host = passes::readback::HostReadPass { buffers: vec![copy.buffer.clone()] };
-        self.last_barriers =
-            submit(&self.ctx, self.cmd, self.fence, &mut self.tracker, &mut self.timer, &[&copy, &host])?;
+        self.scheduler.begin(None)?;
+        self.scheduler.record(&[&copy, &host])?;
+        self.scheduler.end(true)?;
         Ok(copy.bytes().to_vec())
+    }
+
+    /// The schedule mode of the next frames.
+    pub fn mode(&self) -> Mode {
+        self.scheduler.mode()
+    }
+
+    /// Change the schedule mode between frames (same passes, same resources).
+    pub fn set_mode(&mut self, mode: Mode) {
+        self.scheduler.set_mode(mode);
+    }
+
+    /// Host-time every pass of the following frames (each pass submitted alone and waited
+    /// for): for devices whose timestamps cannot be trusted.
+    pub fn set_serial_profile(&mut self, on: bool) {
+        self.scheduler.serial = on;
+    }
+
+    /// The scheduler: submits, waits and timings (for `bench`, `--verbose` and tests).
+    pub fn scheduler(&self) -> &Scheduler {
+        &self.scheduler
+    }
+
+    /// Timings of frames completed since the last call (call [`Renderer::wait_idle`] first
+    /// to include every frame rendered).
+    pub fn take_timings(&mut self) -> Vec<FrameTiming> {
+        self.scheduler.take_timings()
+    }
+
+    /// Wait for every frame in flight.
+    pub fn wait_idle(&mut self) -> GpuResult<()> {
+        self.scheduler.wait_idle()
     }
 
     /// Write the per-frame data for scene time `t`.
@@ -268,35 +309,36 @@ impl Renderer {
             counts: [self.width, self.height, self.scene.lights.len() as u32, tonemap],
             shadow: [s.shadow_filter_radius, s.shadow_normal_bias, s.shadow_map_size as f32, 2f32.powf(s.exposure)],
         };
-        self.frame_buffers.uniforms.write_pod(&[u]);
+        let upload = &self.passes.upload;
+        upload.set(0, bytemuck::bytes_of(&u));
         let bounds = self.scene.world_bounds(t);
         let (lights, views) = lights::build(&self.scene, t, bounds, s.shadow_map_size, s.shadow_filter_radius);
-        if !lights.is_empty() {
-            self.frame_buffers.lights.write_pod(&lights);
-        }
         let bytes: &[u8] = bytemuck::cast_slice(&lights);
+        upload.set(1, bytes);
         if bytes != self.last_lights.as_slice() {
             self.lights_changed = true;
             self.last_lights = bytes.to_vec();
         }
-        if !views.is_empty() {
-            self.frame_buffers.shadow_views.write_pod(&views);
-        }
-        self.scene_gpu.update(&self.scene, t);
+        upload.set(2, bytemuck::cast_slice(&views));
+        upload.set(3, &self.scene_gpu.instance_bytes(&self.scene, t));
     }
 
-    /// Render one frame at scene time `t`, wait for it (with a timeout), and return its timing.
+    /// Record and submit one frame at scene time `t`. The host waits only to reuse a frame
+    /// slot still in flight, or, with `readback`, for this frame (then [`Renderer::output`]).
     pub fn render(&mut self, t: f32, readback: bool) -> GpuResult<FrameStats> {
         let start = Instant::now();
         let ctx = self.ctx.clone();
         if readback {
             self.passes.ensure_readback(&ctx)?;
         }
+        let frame = self.frame_index;
+        self.scheduler.begin(Some(frame))?;
         self.update(t);
         let state = self.frame_state(readback);
         let list = self.passes.list(state);
         self.last_passes = list.iter().map(|p| p.name().to_string()).collect();
-        self.last_barriers = submit(&ctx, self.cmd, self.fence, &mut self.tracker, &mut self.timer, &list)?;
+        self.scheduler.record(&list)?;
+        self.scheduler.end(readback)?;
         if self.passes.voxels.is_some() {
             self.static_voxelized = true;
         }
@@ -305,8 +347,8 @@ impl Renderer {
         }
         self.update_requested = false;
         self.frame_index += 1;
-        let host_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok(FrameStats { host_ms, passes: self.timer.read()? })
+        let timing = if readback { self.scheduler.timing_of(frame).cloned() } else { None };
+        Ok(FrameStats { frame, host_ms: start.elapsed().as_secs_f64() * 1e3, timing })
     }
 
     /// The last frame rendered with `readback = true`.
@@ -324,44 +366,11 @@ impl Renderer {
     }
 }
 
-/// Record `passes` into `cmd`, submit to the graphics queue and wait for `fence` (with the
-/// timeout). Returns the barrier log.
-fn submit(
-    ctx: &Context,
-    cmd: vk::CommandBuffer,
-    fence: vk::Fence,
-    tracker: &mut StateTracker,
-    timer: &mut PassTimer,
-    passes: &[&dyn graph::Pass],
-) -> GpuResult<Vec<String>> {
-    let d = &ctx.device;
-    unsafe {
-        d.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty()).vk("vkResetCommandBuffer")?;
-        d.begin_command_buffer(
-            cmd,
-            &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-        )
-        .vk("vkBeginCommandBuffer")?;
-    }
-    let log = graph::record_passes(ctx, cmd, tracker, Some(timer), passes);
-    unsafe {
-        d.end_command_buffer(cmd).vk("vkEndCommandBuffer")?;
-        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
-        let submit = vk::SubmitInfo2::default().command_buffer_infos(&cmds);
-        let _g = ctx.submit_lock.lock().unwrap_or_else(|p| p.into_inner());
-        d.queue_submit2(ctx.graphics_queue.raw, &[submit], fence).vk("vkQueueSubmit2")?;
-    }
-    let waited = ctx.wait_fences(&[fence], "the frame");
-    unsafe { d.reset_fences(&[fence]) }.vk("vkResetFences")?;
-    waited.map(|_| log)
-}
-
 impl Drop for Renderer {
     fn drop(&mut self) {
+        // Frames in flight still use the passes' resources, which drop before the scheduler.
         unsafe {
             let _ = self.ctx.device.device_wait_idle();
-            self.ctx.device.destroy_fence(self.fence, None);
-            self.ctx.device.destroy_command_pool(self.pool, None);
         }
     }
 }

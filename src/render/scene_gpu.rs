@@ -4,6 +4,7 @@
 
 use crate::gpu::sync::{barrier, Access};
 use crate::gpu::{Buffer, Context, GpuResult, Image, ImageDesc, Sampler};
+use crate::render::graph::Use;
 use crate::scene::Scene;
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -61,7 +62,8 @@ pub struct SceneGpu {
     pub vertices: Buffer,
     pub indices: Buffer,
     pub materials: Buffer,
-    pub instances: Buffer,
+    /// Device-local; written each frame by the upload pass.
+    pub instances: Arc<Buffer>,
     pub textures: Vec<Image>,
     /// Bound when the scene has no textures (descriptor arrays cannot be empty).
     pub placeholder_texture: Option<Image>,
@@ -213,13 +215,13 @@ impl SceneGpu {
             bytemuck::cast_slice(&materials),
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
-        let instances = Buffer::new(
+        let instances = Arc::new(Buffer::new(
             ctx,
             "scene instances",
             (draws.len().max(1) * std::mem::size_of::<GpuInstance>()) as u64,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::CpuToGpu,
-        )?;
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?);
         let mut textures = Vec::new();
         for (i, t) in scene.textures.iter().enumerate() {
             let name = format!("texture {i} ({})", t.path.display());
@@ -242,7 +244,7 @@ impl SceneGpu {
                 .address_mode_w(vk::SamplerAddressMode::REPEAT)
                 .max_lod(vk::LOD_CLAMP_NONE),
         )?;
-        let me = SceneGpu {
+        Ok(SceneGpu {
             vertices: vertex_buffer,
             indices: index_buffer,
             materials: material_buffer,
@@ -251,13 +253,16 @@ impl SceneGpu {
             placeholder_texture,
             texture_sampler,
             draws,
-        };
-        me.update(scene, scene.settings.time);
-        Ok(me)
+        })
     }
 
-    /// Write the instance table for time `t` (host-visible; call before submitting the frame).
-    pub fn update(&self, scene: &Scene, t: f32) {
+    /// The declared read of the instance table by the graphics passes that draw the scene.
+    pub fn instance_reads(&self) -> Use<'_> {
+        Use::buffer(&self.instances, Access::GraphicsShaderReadBuffer)
+    }
+
+    /// The instance table for time `t` (uploaded by the frame's upload pass).
+    pub fn instance_bytes(&self, scene: &Scene, t: f32) -> Vec<u8> {
         let data: Vec<GpuInstance> = self
             .draws
             .iter()
@@ -268,7 +273,7 @@ impl SceneGpu {
                 GpuInstance { model: mat_cols(model), normal: mat_cols(normal), material: [d.material, 0, 0, 0] }
             })
             .collect();
-        self.instances.write_pod(&data);
+        bytemuck::cast_slice(&data).to_vec()
     }
 
     /// Views for the texture descriptor array (never empty).

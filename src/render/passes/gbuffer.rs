@@ -63,6 +63,7 @@ impl GBuffer {
 pub struct GBufferPass {
     pub gbuffer: Arc<GBuffer>,
     scene: Arc<SceneGpu>,
+    frame: FrameBuffers,
     pipeline: Pipeline,
     set: DescriptorSet,
 }
@@ -107,7 +108,7 @@ impl GBufferPass {
             &[set.layout],
             0,
         )?;
-        Ok(GBufferPass { gbuffer: gbuffer.clone(), scene: scene.clone(), pipeline, set })
+        Ok(GBufferPass { gbuffer: gbuffer.clone(), scene: scene.clone(), frame: frame.clone(), pipeline, set })
     }
 }
 
@@ -117,13 +118,16 @@ impl Pass for GBufferPass {
     }
     fn uses(&self) -> Vec<Use<'_>> {
         let g = &self.gbuffer;
-        vec![
+        let mut uses = vec![
             Use::overwrite(&g.depth, Access::DepthAttachmentWrite),
             Use::overwrite(&g.albedo, Access::ColorAttachmentWrite),
             Use::overwrite(&g.normal, Access::ColorAttachmentWrite),
             Use::overwrite(&g.specular, Access::ColorAttachmentWrite),
             Use::overwrite(&g.emission, Access::ColorAttachmentWrite),
-        ]
+            self.scene.instance_reads(),
+        ];
+        uses.extend(self.frame.reads(Access::GraphicsShaderReadBuffer));
+        uses
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let g = &self.gbuffer;

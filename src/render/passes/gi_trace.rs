@@ -3,7 +3,7 @@
 
 use super::gbuffer::GBuffer;
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, ImageDesc, Pipeline, Sampler};
-use crate::render::graph::{Pass, Use};
+use crate::render::graph::{Pass, QueueKind, Use};
 use crate::render::voxel::VoxelVolumes;
 use crate::render::FrameBuffers;
 use ash::vk;
@@ -84,6 +84,7 @@ impl GiTargets {
 }
 
 pub struct GiTracePass {
+    frame: FrameBuffers,
     gbuffer: Arc<GBuffer>,
     volumes: Arc<VoxelVolumes>,
     /// The full-resolution radiance volume sampled below lod 1.
@@ -137,6 +138,7 @@ impl GiTracePass {
             &[(0, u32::from(targets.specular.is_some())), (1, u32::from(targets.shadow.is_some()))],
         )?;
         Ok(GiTracePass {
+            frame: frame.clone(),
             gbuffer: gbuffer.clone(),
             volumes: volumes.clone(),
             lod0,
@@ -163,7 +165,11 @@ impl Pass for GiTracePass {
         ];
         uses.extend(self.volumes.directional.iter().map(|d| Use::image(d, Access::ComputeShaderReadSampled)));
         uses.extend(self.targets.uses(&self.placeholders, Access::ComputeShaderWrite));
+        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
         uses
+    }
+    fn queue(&self) -> QueueKind {
+        QueueKind::Compute
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
         let e = self.targets.diffuse.extent2d();
@@ -173,6 +179,7 @@ impl Pass for GiTracePass {
 }
 
 pub struct GiUpsamplePass {
+    frame: FrameBuffers,
     gbuffer: Arc<GBuffer>,
     low: GiTargets,
     pub targets: GiTargets,
@@ -222,6 +229,7 @@ impl GiUpsamplePass {
             &[(0, u32::from(targets.specular.is_some())), (1, u32::from(targets.shadow.is_some()))],
         )?;
         Ok(GiUpsamplePass {
+            frame: frame.clone(),
             gbuffer: gbuffer.clone(),
             low: low.clone(),
             targets,
@@ -245,7 +253,11 @@ impl Pass for GiUpsamplePass {
         ];
         uses.extend(self.low.uses(&self.placeholders, Access::ComputeShaderReadStorage));
         uses.extend(self.targets.uses(&self.placeholders, Access::ComputeShaderWrite));
+        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
         uses
+    }
+    fn queue(&self) -> QueueKind {
+        QueueKind::Compute
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
         let e = self.targets.diffuse.extent2d();

@@ -36,6 +36,7 @@ pub struct GiInputs<'a> {
 }
 
 pub struct LightingPass {
+    frame: FrameBuffers,
     gbuffer: Arc<GBuffer>,
     shadow_atlas: Arc<Image>,
     gi: Option<GiTargets>,
@@ -94,6 +95,7 @@ impl LightingPass {
         let pipeline =
             Pipeline::compute(ctx, "deferred lighting", shaders::DEFERRED_LIGHT_COMP, &[set.layout], 0, &spec)?;
         Ok(LightingPass {
+            frame: frame.clone(),
             gbuffer: gbuffer.clone(),
             shadow_atlas: shadow_atlas.clone(),
             gi: gi.map(|g| g.targets.clone()),
@@ -129,6 +131,7 @@ impl Pass for LightingPass {
                 uses.push(Use::image(&p.shadow, Access::ComputeShaderReadStorage));
             }
         }
+        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
         uses
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {

@@ -6,6 +6,7 @@ pub mod lighting;
 pub mod readback;
 pub mod shadow;
 pub mod tonemap;
+pub mod upload;
 pub mod voxel_bounce;
 pub mod voxel_clear;
 pub mod voxel_light;

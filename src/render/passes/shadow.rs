@@ -11,6 +11,7 @@ use std::sync::Arc;
 pub struct ShadowPass {
     pub atlas: Arc<Image>,
     scene: Arc<SceneGpu>,
+    frame: FrameBuffers,
     pipeline: Pipeline,
     set: DescriptorSet,
     views: u32,
@@ -51,7 +52,7 @@ impl ShadowPass {
             &[set.layout],
             4,
         )?;
-        Ok(ShadowPass { atlas: atlas.clone(), scene: scene.clone(), pipeline, set, views })
+        Ok(ShadowPass { atlas: atlas.clone(), scene: scene.clone(), frame: frame.clone(), pipeline, set, views })
     }
 }
 
@@ -60,7 +61,9 @@ impl Pass for ShadowPass {
         "shadow maps"
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        vec![Use::overwrite(&self.atlas, Access::DepthAttachmentWrite)]
+        let mut uses = vec![Use::overwrite(&self.atlas, Access::DepthAttachmentWrite), self.scene.instance_reads()];
+        uses.extend(self.frame.reads(Access::GraphicsShaderReadBuffer));
+        uses
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let extent = self.atlas.extent2d();

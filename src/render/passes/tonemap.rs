@@ -9,6 +9,7 @@ use std::sync::Arc;
 pub const DISPLAY_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 
 pub struct TonemapPass {
+    frame: FrameBuffers,
     radiance: Arc<Image>,
     pub display: Arc<Image>,
     pipeline: Pipeline,
@@ -29,7 +30,7 @@ impl TonemapPass {
             &[Bind::Uniform(&frame.uniforms), Bind::StorageImage(radiance.view), Bind::StorageImage(display.view)],
         )?;
         let pipeline = Pipeline::compute(ctx, "tonemap", shaders::TONEMAP_COMP, &[set.layout], 0, &[])?;
-        Ok(TonemapPass { radiance: radiance.clone(), display: display.clone(), pipeline, set })
+        Ok(TonemapPass { frame: frame.clone(), radiance: radiance.clone(), display: display.clone(), pipeline, set })
     }
 }
 
@@ -38,10 +39,12 @@ impl Pass for TonemapPass {
         "tonemap"
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        vec![
+        let mut uses = vec![
             Use::image(&self.radiance, Access::ComputeShaderReadStorage),
             Use::overwrite(&self.display, Access::ComputeShaderWrite),
-        ]
+        ];
+        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
+        uses
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
         let e = self.display.extent2d();

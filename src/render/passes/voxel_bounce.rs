@@ -2,7 +2,7 @@
 //! the current radiance and its directional mips, added to the direct radiance.
 
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline};
-use crate::render::graph::{Pass, Use};
+use crate::render::graph::{Pass, QueueKind, Use};
 use crate::render::voxel::VoxelVolumes;
 use ash::vk;
 use std::sync::Arc;
@@ -70,6 +70,9 @@ impl Pass for VoxelBouncePass {
         ];
         uses.extend(v.directional.iter().map(|d| Use::image(d, Access::ComputeShaderReadSampled)));
         uses
+    }
+    fn queue(&self) -> QueueKind {
+        QueueKind::Compute
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
         let n = self.volumes.grid.resolution;

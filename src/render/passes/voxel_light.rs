@@ -1,7 +1,7 @@
 //! Voxel illumination (compute): direct light (and emission) into the voxel radiance volume.
 
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline, Sampler};
-use crate::render::graph::{Pass, Use};
+use crate::render::graph::{Pass, QueueKind, Use};
 use crate::render::voxel::VoxelVolumes;
 use crate::render::FrameBuffers;
 use crate::scene::{GiSettings, VoxelAttenuation, VoxelOcclusion};
@@ -9,6 +9,7 @@ use ash::vk;
 use std::sync::Arc;
 
 pub struct VoxelLightPass {
+    frame: FrameBuffers,
     volumes: Arc<VoxelVolumes>,
     shadow_atlas: Arc<Image>,
     pipeline: Pipeline,
@@ -55,6 +56,7 @@ impl VoxelLightPass {
             ],
         )?;
         Ok(VoxelLightPass {
+            frame: frame.clone(),
             volumes: volumes.clone(),
             shadow_atlas: shadow_atlas.clone(),
             pipeline,
@@ -78,7 +80,11 @@ impl Pass for VoxelLightPass {
             Use::overwrite(&v.radiance, Access::ComputeShaderWrite),
         ];
         uses.extend(v.emission.as_ref().map(|e| Use::image(e, Access::ComputeShaderReadStorage)));
+        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
         uses
+    }
+    fn queue(&self) -> QueueKind {
+        QueueKind::Compute
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
         let n = self.volumes.grid.resolution;

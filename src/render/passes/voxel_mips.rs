@@ -4,7 +4,7 @@
 
 use crate::gpu::sync::barrier;
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline};
-use crate::render::graph::{Pass, Use};
+use crate::render::graph::{Pass, QueueKind, Use};
 use crate::render::voxel::VoxelVolumes;
 use ash::vk;
 use std::sync::Arc;
@@ -104,6 +104,9 @@ impl Pass for VoxelMipPass {
         let mut uses = vec![Use::image(&self.source, Access::ComputeShaderReadStorage)];
         uses.extend(self.mips.directional.iter().map(|d| Use::overwrite(d, Access::ComputeShaderWrite)));
         uses
+    }
+    fn queue(&self) -> QueueKind {
+        QueueKind::Compute
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let m = &self.mips;

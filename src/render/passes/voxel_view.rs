@@ -10,6 +10,7 @@ use ash::vk;
 use std::sync::Arc;
 
 pub struct VoxelViewPass {
+    frame: FrameBuffers,
     volume: Arc<Image>,
     voxel_radiance: Arc<Image>,
     view: View,
@@ -48,6 +49,7 @@ impl VoxelViewPass {
         )?;
         let pipeline = Pipeline::compute(ctx, "voxel view", shaders::VOXEL_VIEW_COMP, &[set.layout], 0, &[(0, mode)])?;
         Ok(VoxelViewPass {
+            frame: frame.clone(),
             volume: volume.clone(),
             voxel_radiance: volumes.final_radiance().clone(),
             view,
@@ -70,11 +72,13 @@ impl Pass for VoxelViewPass {
         "voxel view"
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        vec![
+        let mut uses = vec![
             Use::image(&self.volume, Access::ComputeShaderReadStorage),
             Use::image(&self.voxel_radiance, Access::ComputeShaderReadStorage),
             Use::overwrite(&self.radiance, Access::ComputeShaderWrite),
-        ]
+        ];
+        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
+        uses
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
         let e = self.radiance.extent2d();
@@ -86,6 +90,7 @@ impl Pass for VoxelViewPass {
 /// Debug view (`--view voxel-mip`): the radiance volumes as the cone tracer samples them, at a
 /// fixed level of detail and direction, composited along each camera ray.
 pub struct VoxelMipViewPass {
+    frame: FrameBuffers,
     volumes: Arc<VoxelVolumes>,
     lod0: Arc<Image>,
     lod: f32,
@@ -130,7 +135,15 @@ impl VoxelMipViewPass {
         };
         let pipeline =
             Pipeline::compute(ctx, "voxel mip view", shaders::VOXEL_MIP_VIEW_COMP, &[set.layout], 4, &[(0, dir)])?;
-        Ok(VoxelMipViewPass { volumes: volumes.clone(), lod0, lod, radiance: radiance.clone(), pipeline, set })
+        Ok(VoxelMipViewPass {
+            frame: frame.clone(),
+            volumes: volumes.clone(),
+            lod0,
+            lod,
+            radiance: radiance.clone(),
+            pipeline,
+            set,
+        })
     }
 }
 
@@ -144,6 +157,7 @@ impl Pass for VoxelMipViewPass {
             Use::overwrite(&self.radiance, Access::ComputeShaderWrite),
         ];
         uses.extend(self.volumes.directional.iter().map(|d| Use::image(d, Access::ComputeShaderReadSampled)));
+        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
         uses
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {

@@ -18,6 +18,7 @@ pub struct Voxelizer {
     set: DescriptorSet,
     volumes: Arc<VoxelVolumes>,
     scene: Arc<SceneGpu>,
+    frame: FrameBuffers,
 }
 
 impl Voxelizer {
@@ -68,7 +69,7 @@ impl Voxelizer {
             &[set.layout],
             4,
         )?;
-        Ok(Arc::new(Voxelizer { pipeline, set, volumes: volumes.clone(), scene: scene.clone() }))
+        Ok(Arc::new(Voxelizer { pipeline, set, volumes: volumes.clone(), scene: scene.clone(), frame: frame.clone() }))
     }
 }
 
@@ -93,7 +94,11 @@ impl Pass for VoxelizePass {
         }
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        self.voxelizer.volumes.uses(Access::FragmentShaderWrite, Access::FragmentShaderWrite)
+        let v = &self.voxelizer;
+        let mut uses = v.volumes.uses(Access::FragmentShaderWrite, Access::FragmentShaderWrite);
+        uses.extend(v.frame.reads(Access::GraphicsShaderReadBuffer));
+        uses.push(v.scene.instance_reads());
+        uses
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let res = self.voxelizer.volumes.grid.resolution;

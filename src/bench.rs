@@ -1,0 +1,332 @@
+//! The `bench` report: what it measures, its JSON form (schema `dvsgi-bench/1`, documented in
+//! BENCHMARKS.md and `docs/bench-schema.json`) and the timeline picture.
+
+use crate::render::graph::QueueKind;
+use crate::render::{FrameTiming, Mode, PassTime};
+use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
+
+pub const SCHEMA: &str = "dvsgi-bench/1";
+
+/// min / median / p95 of a set of samples (ms unless said otherwise).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Stats {
+    pub min: f64,
+    pub median: f64,
+    pub p95: f64,
+}
+
+impl Stats {
+    /// `None` for no samples.
+    pub fn of(samples: &[f64]) -> Option<Stats> {
+        if samples.is_empty() {
+            return None;
+        }
+        let mut v = samples.to_vec();
+        v.sort_by(|a, b| a.total_cmp(b));
+        let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+        Some(Stats { min: v[0], median: q(0.5), p95: q(0.95) })
+    }
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Report {
+    pub schema: String,
+    pub device: DeviceReport,
+    pub scene: String,
+    /// "static" or "dynamic".
+    pub scenario: String,
+    pub width: u32,
+    pub height: u32,
+    pub voxel_resolution: u32,
+    pub frames: u32,
+    pub warmup: u32,
+    pub frames_in_flight: u32,
+    /// The `--set` overrides, as given.
+    pub settings: Vec<String>,
+    pub modes: Vec<ModeReport>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DeviceReport {
+    pub name: String,
+    pub driver: String,
+    /// Vulkan device type, e.g. "CPU" or "DISCRETE_GPU".
+    pub device_type: String,
+    pub queue_topology: String,
+    /// Whether graphics and compute work go to two different queues.
+    pub separate_queues: bool,
+    /// Pass times are on the host clock through VK_EXT_calibrated_timestamps.
+    pub timestamps_calibrated: bool,
+    /// false on CPU implementations, whose timestamps are known to be wrong.
+    pub timestamps_trusted: bool,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModeReport {
+    /// "sync", "async" or "async-lagged".
+    pub mode: String,
+    /// Host wall clock per frame in steady state: the interval between the starts of
+    /// consecutive frames (the last one ends when the GPU is idle).
+    pub frame_host_ms: Stats,
+    pub frame_host_samples: Vec<f64>,
+    /// Host wall clock from the first measured frame's start until the GPU finished the last,
+    /// divided by the frame count: the steady-state frame time (throughput).
+    pub frame_host_mean_ms: f64,
+    /// GPU timestamps: first pass begin to last pass end, over both queues.
+    pub gpu_span_ms: Option<Stats>,
+    /// GPU timestamps: sum of the pass times per queue.
+    pub graphics_busy_ms: Option<Stats>,
+    pub compute_busy_ms: Option<Stats>,
+    pub passes: Vec<PassReport>,
+    pub host_waits: WaitReport,
+    pub submits_per_frame: f64,
+    /// Mean host frame time divided by sync's (absent for sync or when sync did not run).
+    pub frame_ratio_to_sync: Option<f64>,
+    /// This mode's image against sync's at the same scene times (absent for sync).
+    pub image_error_vs_sync: Option<ImageError>,
+    /// One representative frame (median GPU span), for the timeline picture.
+    pub timeline: Vec<TimelinePass>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PassReport {
+    pub name: String,
+    /// "graphics" or "compute": the queue it ran on in this mode.
+    pub queue: String,
+    pub gpu_ms: Option<Stats>,
+    /// `--serial-profile`: host wall clock with the pass submitted alone and waited for.
+    pub serial_host_ms: Option<Stats>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WaitReport {
+    pub slot_reuse: u64,
+    pub readback: u64,
+    pub in_frame: u64,
+    pub idle: u64,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ImageError {
+    pub frames: u32,
+    /// Mean over frames of sum|a - b| / sum|sync| over the RGB radiance.
+    pub mean_relative: f64,
+    pub max_relative: f64,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimelinePass {
+    pub name: String,
+    pub queue: String,
+    pub begin_ms: f64,
+    pub end_ms: f64,
+}
+
+/// Per-pass statistics over frames, in first-seen order.
+pub fn pass_stats(frames: &[FrameTiming]) -> Vec<(String, QueueKind, Vec<f64>)> {
+    let mut out: Vec<(String, QueueKind, Vec<f64>)> = Vec::new();
+    for f in frames {
+        for p in &f.passes {
+            match out.iter_mut().find(|(n, q, _)| *n == p.name && *q == p.queue) {
+                Some((_, _, v)) => v.push(p.gpu_ms()),
+                None => out.push((p.name.clone(), p.queue, vec![p.gpu_ms()])),
+            }
+        }
+    }
+    out
+}
+
+/// Sum of pass times on one queue.
+pub fn busy_ms(f: &FrameTiming, q: QueueKind) -> f64 {
+    f.passes.iter().filter(|p| p.queue == q).map(PassTime::gpu_ms).fold(0.0, |a, b| a + b)
+}
+
+/// The frame with the median GPU span.
+pub fn representative(frames: &[FrameTiming]) -> Option<&FrameTiming> {
+    let mut v: Vec<&FrameTiming> = frames.iter().filter(|f| !f.passes.is_empty()).collect();
+    v.sort_by(|a, b| a.gpu_span_ms().total_cmp(&b.gpu_span_ms()));
+    v.get(v.len() / 2).copied()
+}
+
+/// Relative image difference over RGB radiance: sum|a - b| / sum|a|.
+pub fn relative_error(reference: &[f32], other: &[f32]) -> f64 {
+    let (mut diff, mut total) = (0.0f64, 0.0f64);
+    for (i, (a, b)) in reference.iter().zip(other).enumerate() {
+        if i % 4 == 3 {
+            continue;
+        }
+        diff += (*a as f64 - *b as f64).abs();
+        total += (*a as f64).abs();
+    }
+    if total > 0.0 {
+        diff / total
+    } else {
+        diff
+    }
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+/// The timeline picture: per mode, one lane per queue and one bar per pass of the mode's
+/// representative frame, on a shared time axis, so overlap shows at a glance.
+pub fn timeline_svg(report: &Report) -> String {
+    const LEFT: f64 = 150.0;
+    const WIDTH: f64 = 900.0;
+    const LANE: f64 = 26.0;
+    const TOP: f64 = 58.0;
+    let lanes: Vec<(&ModeReport, QueueKind)> =
+        report.modes.iter().flat_map(|m| QueueKind::ALL.map(|q| (m, q))).collect();
+    // Common origin and scale: each mode's frame starts at its first pass.
+    let span = |m: &ModeReport| {
+        let b = m.timeline.iter().map(|p| p.begin_ms).fold(f64::INFINITY, f64::min);
+        let e = m.timeline.iter().map(|p| p.end_ms).fold(f64::NEG_INFINITY, f64::max);
+        (b, e)
+    };
+    let longest = report.modes.iter().map(span).filter(|(b, e)| e > b).map(|(b, e)| e - b).fold(0.0, f64::max);
+    let scale = if longest > 0.0 { WIDTH / longest } else { 1.0 };
+    let height = TOP + lanes.len() as f64 * LANE + report.modes.len() as f64 * 10.0 + 60.0;
+    let mut svg = String::new();
+    let _ = writeln!(
+        svg,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{}" height="{height}" font-family="sans-serif" font-size="11">"#,
+        LEFT + WIDTH + 40.0
+    );
+    let _ = writeln!(svg, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let d = &report.device;
+    let _ = writeln!(
+        svg,
+        r#"<text x="10" y="18" font-size="13" font-weight="bold">dvsgi bench: {} ({}x{}, {} scenario)</text>"#,
+        escape(&report.scene),
+        report.width,
+        report.height,
+        escape(&report.scenario)
+    );
+    let mut caveat = format!("{} — {}", d.name, d.queue_topology);
+    if !d.timestamps_trusted {
+        caveat.push_str(" — CPU device: GPU timestamps are not trustworthy");
+    }
+    if !d.timestamps_calibrated {
+        caveat.push_str(" — uncalibrated timestamps");
+    }
+    let _ = writeln!(svg, r#"<text x="10" y="34">{}</text>"#, escape(&caveat));
+    let _ = writeln!(
+        svg,
+        r##"<text x="10" y="48" fill="#555">one representative frame per mode (median GPU span); bars from GPU timestamps</text>"##
+    );
+    let mut y = TOP;
+    for (i, m) in report.modes.iter().enumerate() {
+        if i > 0 {
+            y += 10.0;
+        }
+        let (origin, _) = span(m);
+        for q in QueueKind::ALL {
+            let _ = writeln!(svg, r#"<text x="10" y="{}">{} · {}</text>"#, y + LANE * 0.65, escape(&m.mode), q.name());
+            let _ = writeln!(
+                svg,
+                r##"<rect x="{LEFT}" y="{y}" width="{WIDTH}" height="{}" fill="#f4f4f4" stroke="#ddd"/>"##,
+                LANE - 4.0
+            );
+            for (k, p) in m.timeline.iter().filter(|p| p.queue == q.name()).enumerate() {
+                let x = LEFT + (p.begin_ms - origin) * scale;
+                let w = ((p.end_ms - p.begin_ms) * scale).max(1.0);
+                let fill = match (q, k % 2) {
+                    (QueueKind::Graphics, 0) => "#4c78a8",
+                    (QueueKind::Graphics, _) => "#72a0cf",
+                    (QueueKind::Compute, 0) => "#e45756",
+                    (QueueKind::Compute, _) => "#f08a5d",
+                };
+                let _ = writeln!(
+                    svg,
+                    r#"<rect x="{x:.2}" y="{}" width="{w:.2}" height="{}" fill="{fill}"><title>{} ({}): {:.3} ms</title></rect>"#,
+                    y + 1.0,
+                    LANE - 6.0,
+                    escape(&p.name),
+                    q.name(),
+                    p.end_ms - p.begin_ms
+                );
+                if w > 40.0 {
+                    let _ = writeln!(
+                        svg,
+                        r#"<text x="{:.2}" y="{}" fill="white" font-size="10">{}</text>"#,
+                        x + 3.0,
+                        y + LANE * 0.6,
+                        escape(&p.name)
+                    );
+                }
+            }
+            y += LANE;
+        }
+    }
+    // Time axis.
+    let _ = writeln!(svg, r#"<line x1="{LEFT}" y1="{y}" x2="{}" y2="{y}" stroke="black"/>"#, LEFT + WIDTH);
+    let step = nice_step(longest / 8.0);
+    let mut t = 0.0;
+    while step > 0.0 && t <= longest + 1e-9 {
+        let x = LEFT + t * scale;
+        let _ = writeln!(svg, r#"<line x1="{x:.2}" y1="{y}" x2="{x:.2}" y2="{}" stroke="black"/>"#, y + 4.0);
+        let _ = writeln!(svg, r#"<text x="{x:.2}" y="{}" text-anchor="middle">{t:.3}</text>"#, y + 16.0);
+        t += step;
+    }
+    let _ = writeln!(
+        svg,
+        r#"<text x="{}" y="{}" text-anchor="middle">ms from the frame's first pass</text>"#,
+        LEFT + WIDTH / 2.0,
+        y + 32.0
+    );
+    svg.push_str("</svg>\n");
+    svg
+}
+
+/// 1, 2 or 5 times a power of ten, at least `raw`.
+fn nice_step(raw: f64) -> f64 {
+    if raw <= 0.0 || !raw.is_finite() {
+        return 0.0;
+    }
+    let p = 10f64.powf(raw.log10().floor());
+    [1.0, 2.0, 5.0, 10.0].into_iter().map(|m| m * p).find(|s| *s >= raw).unwrap_or(10.0 * p)
+}
+
+/// The mode's name as it appears in reports.
+pub fn mode_name(m: Mode) -> String {
+    m.name().to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stats_of_samples() {
+        let s = Stats::of(&[5.0, 1.0, 3.0, 2.0, 4.0]).unwrap();
+        assert_eq!((s.min, s.median), (1.0, 3.0));
+        assert_eq!(s.p95, 5.0);
+        assert!(Stats::of(&[]).is_none());
+    }
+
+    #[test]
+    fn nice_steps() {
+        assert_eq!(nice_step(0.3), 0.5);
+        assert_eq!(nice_step(1.0), 1.0);
+        assert_eq!(nice_step(13.0), 20.0);
+        assert_eq!(nice_step(0.0), 0.0);
+    }
+
+    #[test]
+    fn relative_error_ignores_alpha() {
+        let a = [1.0, 1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 5.0];
+        let b = [1.0, 1.0, 1.5, 9.0, 1.0, 1.0, 1.0, 0.0];
+        assert!((relative_error(&a, &b) - 0.5 / 6.0).abs() < 1e-12);
+        assert_eq!(relative_error(&a, &a), 0.0);
+    }
+}

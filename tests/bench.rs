@@ -1,0 +1,111 @@
+//! The `bench` binary end to end with small settings: every mode runs, the JSON report is
+//! valid against docs/bench-schema.json, the timeline picture has a lane per queue and mode.
+
+mod common;
+
+use common::repo;
+use std::process::Command;
+
+fn bench(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_bench"))
+        .args(args)
+        .current_dir(repo())
+        .env("DVSGI_VALIDATION", "1")
+        .output()
+        .expect("run bench")
+}
+
+fn schema() -> jsonschema::Validator {
+    let text = std::fs::read_to_string(repo().join("docs/bench-schema.json")).unwrap();
+    jsonschema::validator_for(&serde_json::from_str(&text).unwrap()).expect("a valid JSON Schema")
+}
+
+#[test]
+fn bench_smoke_writes_schema_valid_json_and_a_timeline() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let svg = dir.path().join("timeline.svg");
+    for scenario in ["static", "dynamic"] {
+        let scene = if scenario == "static" { "scenes/cornell-box.toml" } else { "scenes/dynamic-stress.toml" };
+        let o = bench(&[
+            "--scene",
+            scene,
+            "--scenario",
+            scenario,
+            "--modes",
+            "sync,async,async-lagged",
+            "--frames",
+            "3",
+            "--warmup",
+            "1",
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--set",
+            "gi.voxel_resolution=16",
+            "--serial-profile",
+            "--error-frames",
+            "2",
+            "--json",
+            json.to_str().unwrap(),
+            "--timeline",
+            svg.to_str().unwrap(),
+        ]);
+        let (out, err) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+        assert!(o.status.success(), "{scenario}: {err}");
+        assert!(!err.contains("validation"), "{err}");
+        assert!(out.contains("queue topology:") && out.contains("ratio to sync"), "{out}");
+        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let validator = schema();
+        let errors: Vec<String> =
+            validator.iter_errors(&report).map(|e| format!("{e} at {}", e.instance_path)).collect();
+        assert!(errors.is_empty(), "schema errors: {errors:#?}");
+        // The typed report reads it back too (serde, deny_unknown_fields).
+        let typed: dvsgi::bench::Report = serde_json::from_value(report).unwrap();
+        assert_eq!(typed.scenario, scenario);
+        let names: Vec<_> = typed.modes.iter().map(|m| m.mode.as_str()).collect();
+        assert_eq!(names, ["sync", "async", "async-lagged"]);
+        for m in &typed.modes {
+            assert_eq!(m.frame_host_samples.len(), 3);
+            assert_eq!(m.host_waits.in_frame, 0, "{}: no host wait inside a frame", m.mode);
+            assert!(m.frame_host_mean_ms > 0.0);
+            assert!(m.passes.iter().any(|p| p.name == "cone trace" && p.serial_host_ms.is_some()), "{m:?}");
+            let trace_queue = &m.passes.iter().find(|p| p.name == "cone trace").unwrap().queue;
+            if typed.device.timestamps_calibrated || !m.timeline.is_empty() {
+                assert_eq!(trace_queue, if m.mode == "sync" { "graphics" } else { "compute" });
+            }
+            assert_eq!(m.image_error_vs_sync.is_some(), m.mode != "sync");
+            assert_eq!(m.frame_ratio_to_sync.is_some(), m.mode != "sync");
+        }
+        if scenario == "dynamic" {
+            // The lagged image trails the moving light.
+            let lag = typed.modes[2].image_error_vs_sync.as_ref().unwrap().mean_relative;
+            assert!(lag > 0.0, "{lag}");
+        }
+        let picture = std::fs::read_to_string(&svg).unwrap();
+        assert!(picture.starts_with("<svg"), "{picture}");
+        for lane in ["sync · graphics", "sync · compute", "async · compute", "async-lagged · graphics"] {
+            assert!(picture.contains(lane), "{lane} lane missing");
+        }
+        assert!(picture.contains("<title>cone trace (compute)"), "a cone-trace bar on the compute lane");
+    }
+}
+
+#[test]
+fn bench_rejects_impossible_requests_without_writing() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("b.json");
+    // Nothing moves in the Cornell box: the dynamic scenario would measure nothing.
+    let o = bench(&["--scene", "scenes/cornell-box.toml", "--scenario", "dynamic", "--json", json.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("nothing in this scene moves"), "{err}");
+    let o = bench(&["--scene", "scenes/cornell-box.toml", "--modes", "sync,turbo"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("unknown schedule mode 'turbo'"));
+    let o = bench(&["--scene", "scenes/cornell-box.toml", "--json", "/nonexistent-dir/b.json"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("/nonexistent-dir"));
+    assert!(std::fs::read_dir(dir.path()).unwrap().next().is_none(), "nothing written");
+}
