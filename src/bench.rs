@@ -75,7 +75,7 @@ pub struct ModeReport {
     pub frame_host_ms: Stats,
     pub frame_host_samples: Vec<f64>,
     /// Host wall clock from the first measured frame's start until the GPU finished the last,
-    /// divided by the frame count: the steady-state frame time (throughput).
+    /// divided by the frame count (includes draining the frames in flight at the end).
     pub frame_host_mean_ms: f64,
     /// GPU timestamps: first pass begin to last pass end, over both queues.
     pub gpu_span_ms: Option<Stats>,
@@ -85,7 +85,7 @@ pub struct ModeReport {
     pub passes: Vec<PassReport>,
     pub host_waits: WaitReport,
     pub submits_per_frame: f64,
-    /// Mean host frame time divided by sync's (absent for sync or when sync did not run).
+    /// Median host frame time divided by sync's (absent for sync or when sync did not run).
     pub frame_ratio_to_sync: Option<f64>,
     /// This mode's image against sync's at the same scene times (absent for sync).
     pub image_error_vs_sync: Option<ImageError>,
@@ -271,11 +271,12 @@ pub fn timeline_svg(report: &Report) -> String {
     // Time axis.
     let _ = writeln!(svg, r#"<line x1="{LEFT}" y1="{y}" x2="{}" y2="{y}" stroke="black"/>"#, LEFT + WIDTH);
     let step = nice_step(longest / 8.0);
+    let decimals = if step > 0.0 { (-step.log10().floor()).max(0.0) as usize } else { 0 };
     let mut t = 0.0;
     while step > 0.0 && t <= longest + 1e-9 {
         let x = LEFT + t * scale;
         let _ = writeln!(svg, r#"<line x1="{x:.2}" y1="{y}" x2="{x:.2}" y2="{}" stroke="black"/>"#, y + 4.0);
-        let _ = writeln!(svg, r#"<text x="{x:.2}" y="{}" text-anchor="middle">{t:.3}</text>"#, y + 16.0);
+        let _ = writeln!(svg, r#"<text x="{x:.2}" y="{}" text-anchor="middle">{t:.decimals$}</text>"#, y + 16.0);
         t += step;
     }
     let _ = writeln!(
