@@ -135,6 +135,8 @@ pub struct SerialTime {
 }
 
 const MAX_STAMPED_PASSES: u32 = 128;
+/// Frame timings kept until [`Scheduler::take_timings`].
+const MAX_KEPT_TIMINGS: usize = 1024;
 
 struct Batch {
     cmd: vk::CommandBuffer,
@@ -667,6 +669,10 @@ impl Scheduler {
             .map(|(name, queue, b, e)| PassTime { name, queue, begin_ms: to_ms(b), end_ms: to_ms(e) })
             .collect();
         passes.sort_by(|a, b| a.begin_ms.total_cmp(&b.begin_ms));
+        // Keep a bounded history for callers that never take the timings.
+        if self.completed.len() >= MAX_KEPT_TIMINGS {
+            self.completed.remove(0);
+        }
         self.completed.push(FrameTiming { frame, passes, calibrated: offset.is_some() });
         Ok(())
     }
