@@ -2,7 +2,7 @@
 //! BENCHMARKS.md and `docs/bench-schema.json`) and the timeline picture.
 
 use crate::render::graph::QueueKind;
-use crate::render::{FrameTiming, Mode, PassTime};
+use crate::render::{FrameTiming, PassTime};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 
@@ -296,11 +296,6 @@ fn nice_step(raw: f64) -> f64 {
     }
     let p = 10f64.powf(raw.log10().floor());
     [1.0, 2.0, 5.0, 10.0].into_iter().map(|m| m * p).find(|s| *s >= raw).unwrap_or(10.0 * p)
-}
-
-/// The mode's name as it appears in reports.
-pub fn mode_name(m: Mode) -> String {
-    m.name().to_string()
 }
 
 #[cfg(test)]

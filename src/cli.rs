@@ -63,14 +63,3 @@ pub fn report(e: &dyn std::error::Error) {
         source = s.source();
     }
 }
-
-/// Statistics over samples: (min, median, p95).
-pub fn stats(samples: &[f64]) -> (f64, f64, f64) {
-    if samples.is_empty() {
-        return (f64::NAN, f64::NAN, f64::NAN);
-    }
-    let mut v = samples.to_vec();
-    v.sort_by(|a, b| a.total_cmp(b));
-    let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
-    (v[0], q(0.5), q(0.95))
-}

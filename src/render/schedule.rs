@@ -16,7 +16,7 @@
 
 use super::graph::{record_barriers, Pass, QueueKind, StateTracker, Transition};
 use crate::gpu::context::GPU_TIMEOUT;
-use crate::gpu::{Context, GpuError, GpuResult, QueueTopology, VkContext};
+use crate::gpu::{Context, GpuError, GpuResult, VkContext};
 use ash::vk;
 use std::fmt;
 use std::str::FromStr;
@@ -304,15 +304,6 @@ impl Scheduler {
     /// Change the mode between frames (the passes and resources stay the same).
     pub fn set_mode(&mut self, mode: Mode) {
         self.mode = mode;
-    }
-
-    pub fn frames_in_flight(&self) -> usize {
-        self.slots.len()
-    }
-
-    /// Whether the two streams really go to different queues.
-    pub fn separate_queues(&self) -> bool {
-        self.ctx.topology != QueueTopology::SingleQueue
     }
 
     /// Submits of the last frame, in submission order.

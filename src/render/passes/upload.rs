@@ -32,7 +32,9 @@ impl UploadPass {
             "upload to {}",
             self.targets[i].name
         );
-        self.data.borrow_mut()[i] = bytes.to_vec();
+        let mut data = self.data.borrow_mut();
+        data[i].clear();
+        data[i].extend_from_slice(bytes);
     }
 }
 
