@@ -459,6 +459,7 @@ impl Scheduler {
                 )
             }
             .vk("vkAllocateCommandBuffers")?[0];
+            self.ctx.name_object(cmd, &format!("{} commands {}, slot {}", q.name(), ss.cmds.len(), self.slot));
             ss.cmds.push(cmd);
         }
         let cmd = ss.cmds[ss.used];
@@ -470,7 +471,6 @@ impl Scheduler {
             )
         }
         .vk("vkBeginCommandBuffer")?;
-        self.ctx.name_object(cmd, &format!("{} batch {}", q.name(), self.streams[q.index()].value + 1));
         Ok(cmd)
     }
 
