@@ -1,10 +1,14 @@
 //! The `bench` report: what it measures, its JSON form (schema `dvsgi-bench/1`, documented in
 //! BENCHMARKS.md and `docs/bench-schema.json`) and the timeline picture.
 
+use crate::gpu::Context;
 use crate::render::graph::QueueKind;
-use crate::render::{FrameTiming, PassTime};
+use crate::render::{FrameTiming, Mode, PassTime, RenderOptions, Renderer};
+use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
+use std::sync::Arc;
+use std::time::Instant;
 
 pub const SCHEMA: &str = "dvsgi-bench/1";
 
@@ -325,4 +329,149 @@ mod tests {
         assert!((relative_error(&a, &b) - 0.5 / 6.0).abs() < 1e-12);
         assert_eq!(relative_error(&a, &a), 0.0);
     }
+}
+
+/// How [`measure`] times one schedule mode (the `bench` binary's and the sweep's timing).
+#[derive(Debug, Clone, Copy)]
+pub struct Measure {
+    pub mode: Mode,
+    /// Timed frames, after `warmup` untimed ones.
+    pub frames: u32,
+    pub warmup: u32,
+    pub frames_in_flight: u32,
+    /// Afterwards, submit every pass alone for three frames and host-time it.
+    pub serial_profile: bool,
+    /// The dynamic scenario: every frame updates the voxels (revoxelize, relight, bounces)
+    /// and scene time advances by this many seconds per frame. `None`: a static scene, where
+    /// frames after the first reuse the lit voxels.
+    pub dynamic_dt: Option<f32>,
+}
+
+impl Measure {
+    /// Scene time of frame `i`.
+    pub fn time_of(&self, scene: &Scene, i: u32) -> f32 {
+        match self.dynamic_dt {
+            None => scene.settings.time,
+            Some(dt) => scene.settings.time + i as f32 * dt,
+        }
+    }
+}
+
+/// Render `warmup + frames` frames with a new renderer and report the host wall clock per
+/// frame (start to next start, the last to idle), the GPU timestamps, the host waits and
+/// optionally the serial profile. The flag says whether every timestamp was calibrated.
+pub fn measure(ctx: &Arc<Context>, scene: &Scene, m: &Measure) -> crate::Result<(ModeReport, bool)> {
+    let options = RenderOptions { mode: m.mode, frames_in_flight: m.frames_in_flight };
+    let mut r = Renderer::with_options(ctx, scene.clone(), options)?;
+    measure_renderer(&mut r, scene, m)
+}
+
+/// [`measure`] with a renderer already made (its later frames continue from its state).
+pub fn measure_renderer(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::Result<(ModeReport, bool)> {
+    let mode = m.mode;
+    let total = m.warmup + m.frames;
+    let mut starts = Vec::with_capacity(total as usize);
+    let mut submits = 0usize;
+    let mut waits_before = r.scheduler().waits;
+    for i in 0..total {
+        if i == m.warmup {
+            waits_before = r.scheduler().waits;
+        }
+        if m.dynamic_dt.is_some() {
+            r.request_voxel_update();
+        }
+        starts.push(Instant::now());
+        r.render(m.time_of(scene, i), false)?;
+        if i >= m.warmup {
+            submits += r.scheduler().submits().len();
+        }
+    }
+    r.wait_idle()?;
+    let end = Instant::now();
+    let host: Vec<f64> = (m.warmup as usize..total as usize)
+        .map(|i| {
+            let next = starts.get(i + 1).copied().unwrap_or(end);
+            (next - starts[i]).as_secs_f64() * 1e3
+        })
+        .collect();
+    let w = r.scheduler().waits;
+    let waits = WaitReport {
+        slot_reuse: w.slot_reuse - waits_before.slot_reuse,
+        readback: w.readback - waits_before.readback,
+        in_frame: w.in_frame - waits_before.in_frame,
+        idle: w.idle - waits_before.idle,
+    };
+    let timings: Vec<_> = r.take_timings().into_iter().filter(|f| f.frame >= m.warmup as u64).collect();
+    let calibrated = timings.iter().all(|f| f.calibrated);
+    let mut serial: Vec<(String, Vec<f64>)> = Vec::new();
+    if m.serial_profile {
+        r.set_serial_profile(true);
+        for i in 0..3 {
+            if m.dynamic_dt.is_some() {
+                r.request_voxel_update();
+            }
+            r.render(m.time_of(scene, total + i), false)?;
+            for s in r.scheduler().serial_times() {
+                match serial.iter_mut().find(|(n, _)| *n == s.name) {
+                    Some((_, v)) => v.push(s.host_ms),
+                    None => serial.push((s.name.clone(), vec![s.host_ms])),
+                }
+            }
+        }
+        r.set_serial_profile(false);
+        r.wait_idle()?;
+    }
+    let mut passes: Vec<PassReport> = pass_stats(&timings)
+        .into_iter()
+        .map(|(name, q, v)| PassReport {
+            serial_host_ms: serial.iter().find(|(n, _)| *n == name).and_then(|(_, s)| Stats::of(s)),
+            name,
+            queue: q.name().to_string(),
+            gpu_ms: Stats::of(&v),
+        })
+        .collect();
+    if timings.iter().all(|f| f.passes.is_empty()) {
+        // No timestamps on this device: list the passes with their host times only.
+        passes = serial
+            .iter()
+            .map(|(n, s)| PassReport {
+                name: n.clone(),
+                queue: String::new(),
+                gpu_ms: None,
+                serial_host_ms: Stats::of(s),
+            })
+            .collect();
+    }
+    let with_stamps: Vec<_> = timings.iter().filter(|f| !f.passes.is_empty()).collect();
+    let span: Vec<f64> = with_stamps.iter().map(|f| f.gpu_span_ms()).collect();
+    let busy = |q| with_stamps.iter().map(|f| busy_ms(f, q)).collect::<Vec<_>>();
+    let timeline = representative(&timings)
+        .map(|f| {
+            f.passes
+                .iter()
+                .map(|p| TimelinePass {
+                    name: p.name.clone(),
+                    queue: p.queue.name().to_string(),
+                    begin_ms: p.begin_ms,
+                    end_ms: p.end_ms,
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let report = ModeReport {
+        mode: mode.name().to_string(),
+        frame_host_ms: Stats::of(&host).expect("at least one frame"),
+        frame_host_mean_ms: (end - starts[m.warmup as usize]).as_secs_f64() * 1e3 / m.frames as f64,
+        frame_host_samples: host,
+        gpu_span_ms: Stats::of(&span),
+        graphics_busy_ms: Stats::of(&busy(QueueKind::Graphics)),
+        compute_busy_ms: Stats::of(&busy(QueueKind::Compute)),
+        passes,
+        host_waits: waits,
+        submits_per_frame: submits as f64 / m.frames as f64,
+        frame_ratio_to_sync: None,
+        image_error_vs_sync: None,
+        timeline,
+    };
+    Ok((report, calibrated))
 }

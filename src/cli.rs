@@ -23,9 +23,19 @@ pub struct CommonArgs {
     /// (repeatable; keys as in the scene file, array elements by index: lights.0.intensity).
     #[arg(long = "set", global = true, value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
+    /// Cone-tracing quality from the measured speed/accuracy frontier (ACCURACY.md): sets
+    /// [gi] keys before any --set.
+    #[arg(long, global = true, value_enum)]
+    pub preset: Option<scene::Preset>,
 }
 
 impl CommonArgs {
+    /// The settings given on the command line, for reports: the preset, then each --set.
+    pub fn settings(&self) -> Vec<String> {
+        let preset = self.preset.map(|p| format!("preset={}", format!("{p:?}").to_lowercase()));
+        preset.into_iter().chain(self.sets.iter().cloned()).collect()
+    }
+
     pub fn context(&self) -> crate::Result<Arc<Context>> {
         Ok(Context::new(&ContextDesc { validation: self.validation, device: self.device.clone() })?)
     }
@@ -33,7 +43,7 @@ impl CommonArgs {
     /// Load a scene with the `--set` overrides plus `extra` ones (from dedicated flags such
     /// as --width, applied last).
     pub fn load_scene(&self, path: &Path, extra: &[(String, String)]) -> crate::Result<Scene> {
-        let mut overrides = Vec::new();
+        let mut overrides = self.preset.map(|p| p.overrides()).unwrap_or_default();
         for s in &self.sets {
             overrides.push(scene::parse_override(s)?);
         }

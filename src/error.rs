@@ -9,6 +9,12 @@ pub enum Error {
     Gpu(#[from] crate::gpu::GpuError),
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
+    #[error(transparent)]
+    Metrics(#[from] crate::metrics::MetricsError),
+    #[error(transparent)]
+    Plot(#[from] crate::pareto::PlotError),
+    #[error(transparent)]
+    Sweep(#[from] crate::sweep::SweepError),
     /// Vulkan validation reported errors (only when validation is on).
     #[error("Vulkan validation reported {0} error(s); see the messages above")]
     Validation(u32),

@@ -8,8 +8,12 @@ pub mod bench;
 pub mod cli;
 pub mod error;
 pub mod gpu;
+pub mod metrics;
 pub mod output;
+pub mod pareto;
+pub mod reference;
 pub mod render;
 pub mod scene;
+pub mod sweep;
 
 pub use error::{Error, Result};

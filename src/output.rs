@@ -85,6 +85,21 @@ pub fn write_frame(path: &Path, frame: &FrameOutput) -> Result<(), OutputError> 
     write_atomic(path, format, &image)
 }
 
+/// Write linear RGB f32 radiance (`width * height * 3` values) to an EXR file, atomically.
+pub fn write_exr(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<(), OutputError> {
+    check_target_dir(path)?;
+    let image = image::DynamicImage::ImageRgb32F(
+        image::Rgb32FImage::from_raw(width, height, rgb.to_vec()).expect("RGB buffer matches its size"),
+    );
+    write_atomic(path, Format::Exr, &image)
+}
+
+/// Write an RGB8 picture to a PNG file, atomically.
+pub fn write_png(path: &Path, image: &image::RgbImage) -> Result<(), OutputError> {
+    check_target_dir(path)?;
+    write_atomic(path, Format::Png, &image::DynamicImage::ImageRgb8(image.clone()))
+}
+
 fn write_atomic(path: &Path, format: Format, image: &image::DynamicImage) -> Result<(), OutputError> {
     let file_name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
     let tmp = path.with_file_name(format!(".{file_name}.{}.tmp", std::process::id()));

@@ -4,15 +4,13 @@
 //! and a timeline picture of one frame per mode. See BENCHMARKS.md.
 
 use clap::{Parser, ValueEnum};
-use dvsgi::bench::{self, ImageError, ModeReport, PassReport, Report, Stats, TimelinePass, WaitReport};
+use dvsgi::bench::{self, ImageError, Measure, ModeReport, Report, Stats};
 use dvsgi::cli::{check_validation, report, CommonArgs};
 use dvsgi::gpu::{Context, QueueTopology};
-use dvsgi::render::graph::QueueKind;
 use dvsgi::render::{Mode, RenderOptions, Renderer};
 use dvsgi::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::Instant;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum Scenario {
@@ -118,7 +116,7 @@ fn run(args: Args) -> dvsgi::Result<()> {
     let mut calibrated = true;
     for &mode in &args.modes {
         eprintln!("{mode}: {} frames after {} warm-up", args.frames, args.warmup);
-        let (m, cal) = measure(&ctx, &scene, &args, mode)?;
+        let (m, cal) = bench::measure(&ctx, &scene, &measure_spec(&args, mode))?;
         calibrated &= cal;
         modes.push(m);
     }
@@ -157,7 +155,7 @@ fn run(args: Args) -> dvsgi::Result<()> {
         frames: args.frames,
         warmup: args.warmup,
         frames_in_flight: args.frames_in_flight,
-        settings: args.common.sets.clone(),
+        settings: args.common.settings(),
         modes,
     };
     print_table(&ctx, &report);
@@ -174,125 +172,22 @@ fn run(args: Args) -> dvsgi::Result<()> {
 }
 
 /// Scene time of frame `i`.
+/// The bench's timing settings for one mode.
+fn measure_spec(args: &Args, mode: Mode) -> Measure {
+    Measure {
+        mode,
+        frames: args.frames,
+        warmup: args.warmup,
+        frames_in_flight: args.frames_in_flight,
+        serial_profile: args.serial_profile,
+        dynamic_dt: (args.scenario == Scenario::Dynamic).then_some(args.dt),
+    }
+}
+
 fn time_of(scene: &Scene, args: &Args, i: u32) -> f32 {
-    match args.scenario {
-        Scenario::Static => scene.settings.time,
-        Scenario::Dynamic => scene.settings.time + i as f32 * args.dt,
-    }
+    measure_spec(args, Mode::Sync).time_of(scene, i)
 }
 
-/// Time `args.frames` frames in `mode`. Returns the report and whether timestamps were calibrated.
-fn measure(ctx: &std::sync::Arc<Context>, scene: &Scene, args: &Args, mode: Mode) -> dvsgi::Result<(ModeReport, bool)> {
-    let options = RenderOptions { mode, frames_in_flight: args.frames_in_flight };
-    let mut r = Renderer::with_options(ctx, scene.clone(), options)?;
-    let total = args.warmup + args.frames;
-    let mut starts = Vec::with_capacity(total as usize);
-    let mut submits = 0usize;
-    let mut waits_before = r.scheduler().waits;
-    for i in 0..total {
-        if i == args.warmup {
-            waits_before = r.scheduler().waits;
-        }
-        if args.scenario == Scenario::Dynamic {
-            r.request_voxel_update();
-        }
-        starts.push(Instant::now());
-        r.render(time_of(scene, args, i), false)?;
-        if i >= args.warmup {
-            submits += r.scheduler().submits().len();
-        }
-    }
-    r.wait_idle()?;
-    let end = Instant::now();
-    let host: Vec<f64> = (args.warmup as usize..total as usize)
-        .map(|i| {
-            let next = starts.get(i + 1).copied().unwrap_or(end);
-            (next - starts[i]).as_secs_f64() * 1e3
-        })
-        .collect();
-    let w = r.scheduler().waits;
-    let waits = WaitReport {
-        slot_reuse: w.slot_reuse - waits_before.slot_reuse,
-        readback: w.readback - waits_before.readback,
-        in_frame: w.in_frame - waits_before.in_frame,
-        idle: w.idle - waits_before.idle,
-    };
-    let timings: Vec<_> = r.take_timings().into_iter().filter(|f| f.frame >= args.warmup as u64).collect();
-    let calibrated = timings.iter().all(|f| f.calibrated);
-    let mut serial: Vec<(String, Vec<f64>)> = Vec::new();
-    if args.serial_profile {
-        r.set_serial_profile(true);
-        for i in 0..3 {
-            if args.scenario == Scenario::Dynamic {
-                r.request_voxel_update();
-            }
-            r.render(time_of(scene, args, total + i), false)?;
-            for s in r.scheduler().serial_times() {
-                match serial.iter_mut().find(|(n, _)| *n == s.name) {
-                    Some((_, v)) => v.push(s.host_ms),
-                    None => serial.push((s.name.clone(), vec![s.host_ms])),
-                }
-            }
-        }
-        r.set_serial_profile(false);
-        r.wait_idle()?;
-    }
-    let mut passes: Vec<PassReport> = bench::pass_stats(&timings)
-        .into_iter()
-        .map(|(name, q, v)| PassReport {
-            serial_host_ms: serial.iter().find(|(n, _)| *n == name).and_then(|(_, s)| Stats::of(s)),
-            name,
-            queue: q.name().to_string(),
-            gpu_ms: Stats::of(&v),
-        })
-        .collect();
-    if timings.iter().all(|f| f.passes.is_empty()) {
-        // No timestamps on this device: list the passes with their host times only.
-        passes = serial
-            .iter()
-            .map(|(n, s)| PassReport {
-                name: n.clone(),
-                queue: String::new(),
-                gpu_ms: None,
-                serial_host_ms: Stats::of(s),
-            })
-            .collect();
-    }
-    let with_stamps: Vec<_> = timings.iter().filter(|f| !f.passes.is_empty()).collect();
-    let span: Vec<f64> = with_stamps.iter().map(|f| f.gpu_span_ms()).collect();
-    let busy = |q| with_stamps.iter().map(|f| bench::busy_ms(f, q)).collect::<Vec<_>>();
-    let timeline = bench::representative(&timings)
-        .map(|f| {
-            f.passes
-                .iter()
-                .map(|p| TimelinePass {
-                    name: p.name.clone(),
-                    queue: p.queue.name().to_string(),
-                    begin_ms: p.begin_ms,
-                    end_ms: p.end_ms,
-                })
-                .collect()
-        })
-        .unwrap_or_default();
-    let report = ModeReport {
-        mode: mode.name().to_string(),
-        frame_host_ms: Stats::of(&host).expect("at least one frame"),
-        frame_host_mean_ms: (end - starts[args.warmup as usize]).as_secs_f64() * 1e3 / args.frames as f64,
-        frame_host_samples: host,
-        gpu_span_ms: Stats::of(&span),
-        graphics_busy_ms: Stats::of(&busy(QueueKind::Graphics)),
-        compute_busy_ms: Stats::of(&busy(QueueKind::Compute)),
-        passes,
-        host_waits: waits,
-        submits_per_frame: submits as f64 / args.frames as f64,
-        frame_ratio_to_sync: None,
-        image_error_vs_sync: None,
-        timeline,
-    };
-    Ok((report, calibrated))
-}
-
-/// Render the same frames in sync and in `mode` (two renderers) and compare the radiance.
 fn image_error(ctx: &std::sync::Arc<Context>, scene: &Scene, args: &Args, mode: Mode) -> dvsgi::Result<ImageError> {
     let opts = |mode| RenderOptions { mode, frames_in_flight: args.frames_in_flight };
     let mut reference = Renderer::with_options(ctx, scene.clone(), opts(Mode::Sync))?;

@@ -59,6 +59,91 @@ enum Command {
         #[arg(long, short)]
         verbose: bool,
     },
+    /// Compare a rendered image with a reference (both linear-radiance .exr): RMSE and relMSE
+    /// on radiance, FLIP and SSIM on the display images (exposure and tone map as given).
+    Compare {
+        /// The image to judge (.exr).
+        test: PathBuf,
+        /// The reference (.exr), e.g. from `dvsgi reference`.
+        reference: PathBuf,
+        /// Write the FLIP error map (magma colours) to this .png.
+        #[arg(long)]
+        diff: Option<PathBuf>,
+        /// Exposure in EV stops of the display transform.
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        exposure: f32,
+        /// Tone map of the display transform: aces | reinhard | clamp.
+        #[arg(long, default_value = "aces")]
+        tonemap: String,
+        /// Also write the figures as JSON.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
+    /// The speed/accuracy sweep: render a grid of cone-tracing settings, time each, compare it
+    /// with the path-traced reference, mark the Pareto-optimal ones and draw the frontier.
+    Sweep {
+        /// Scene file (TOML).
+        scene: PathBuf,
+        /// Output directory (created; an existing sweep of the same setup is resumed).
+        #[arg(long, short)]
+        out: PathBuf,
+        /// A knob and its values, e.g. --grid voxel_resolution=32,64,128 (repeatable; knobs:
+        /// voxel_resolution, diffuse_cones, diffuse_cone_angle, step, bounces, downsample).
+        /// Without --grid: the default grid of 216 configurations (ACCURACY.md).
+        #[arg(long)]
+        grid: Vec<String>,
+        /// Reference samples per pixel.
+        #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+        spp: u32,
+        /// Timed frames per configuration (each scenario), after --warmup.
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+        frames: u32,
+        #[arg(long, default_value_t = 1)]
+        warmup: u32,
+        /// Queue schedule of the timed frames.
+        #[arg(long, default_value = "sync")]
+        schedule: Mode,
+        /// Image width (overrides render.width).
+        #[arg(long)]
+        width: Option<u32>,
+        /// Image height (overrides render.height).
+        #[arg(long)]
+        height: Option<u32>,
+    },
+    /// Path-trace the ground truth: unbiased, the same scene model as the renderer. Writes
+    /// linear radiance to each .exr OUT with the variance of each pixel's mean beside it
+    /// (ref.exr -> ref.var.exr), and the display image to each .png OUT.
+    Reference {
+        /// Scene file (TOML; see scenes/FORMAT.md).
+        scene: PathBuf,
+        /// Output file(s): .exr (linear radiance, plus .var.exr) or .png (tone-mapped).
+        #[arg(long, short, required = true)]
+        out: Vec<PathBuf>,
+        /// Samples (paths) per pixel.
+        #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+        spp: u32,
+        /// Indirect bounces at most (default: until Russian roulette ends the path; 0 = direct
+        /// light only, like `--gi none`).
+        #[arg(long)]
+        bounces: Option<u32>,
+        /// Seed of the random sequences.
+        #[arg(long, default_value_t = 1)]
+        seed: u32,
+        /// Spread each pixel's paths over its area (antialiased). By default they leave
+        /// through the pixel centre, where the rasterizer samples, so error maps against the
+        /// renderer show lighting errors, not edge aliasing.
+        #[arg(long)]
+        jitter: bool,
+        /// Image width (overrides render.width).
+        #[arg(long)]
+        width: Option<u32>,
+        /// Image height (overrides render.height).
+        #[arg(long)]
+        height: Option<u32>,
+        /// Scene time in seconds (overrides render.time).
+        #[arg(long)]
+        time: Option<f32>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -75,21 +160,38 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> dvsgi::Result<()> {
     match cli.command {
         Command::Info { scene } => info(&cli.common, scene),
+        Command::Compare { test, reference, diff, exposure, tonemap, json } => {
+            compare(&test, &reference, diff.as_deref(), exposure, &tonemap, json.as_deref())
+        }
+        Command::Sweep { scene, out, grid, spp, frames, warmup, schedule, width, height } => {
+            let grid =
+                if grid.is_empty() { dvsgi::sweep::Grid::default_grid() } else { dvsgi::sweep::Grid::parse(&grid)? };
+            let opts = dvsgi::sweep::SweepOptions {
+                scene,
+                out,
+                grid,
+                spp,
+                frames,
+                warmup,
+                schedule,
+                size: size_overrides(width, height, None),
+            };
+            let results = dvsgi::sweep::run(&cli.common, &opts)?;
+            print_sweep(&results);
+            println!("wrote {}/results.csv, results.json and frontier-*.svg", opts.out.display());
+            Ok(())
+        }
+        Command::Reference { scene, out, spp, bounces, seed, jitter, width, height, time } => {
+            let options =
+                dvsgi::reference::ReferenceOptions { spp, max_bounces: bounces, seed, jitter, ..Default::default() };
+            reference(&cli.common, &scene, &out, options, size_overrides(width, height, time))
+        }
         Command::Render { scene, out, width, height, time, view, gi, schedule, frames, verbose } => {
             // Fail on unwritable targets before doing any work.
             for o in &out {
                 dvsgi::output::check_target(o)?;
             }
-            let mut extra = Vec::new();
-            if let Some(w) = width {
-                extra.push(("render.width".to_string(), w.to_string()));
-            }
-            if let Some(h) = height {
-                extra.push(("render.height".to_string(), h.to_string()));
-            }
-            if let Some(t) = time {
-                extra.push(("render.time".to_string(), format!("{t:?}")));
-            }
+            let mut extra = size_overrides(width, height, time);
             if let Some(v) = view {
                 extra.push(("render.view".to_string(), format!("{v:?}")));
             }
@@ -134,6 +236,150 @@ fn run(cli: Cli) -> dvsgi::Result<()> {
             Ok(())
         }
     }
+}
+
+fn compare(
+    test: &std::path::Path,
+    reference: &std::path::Path,
+    diff: Option<&std::path::Path>,
+    exposure: f32,
+    tonemap: &str,
+    json: Option<&std::path::Path>,
+) -> dvsgi::Result<()> {
+    use dvsgi::metrics::{compare_files, flip_error_map, LinearImage};
+    let tonemap: dvsgi::scene::ToneMap = serde_json::from_value(serde_json::Value::String(tonemap.to_string()))
+        .map_err(|_| dvsgi::Error::Usage(format!("--tonemap {tonemap}: use aces, reinhard or clamp")))?;
+    if !exposure.is_finite() {
+        return Err(dvsgi::Error::Usage(format!("--exposure {exposure} is not a finite number")));
+    }
+    for out in diff.iter().chain(json.iter()) {
+        dvsgi::output::check_target_dir(out)?;
+    }
+    if let Some(d) = diff {
+        if dvsgi::output::format_of(d)? != dvsgi::output::Format::Png {
+            return Err(dvsgi::Error::Usage(format!("{}: the error map is a picture; give a .png name", d.display())));
+        }
+    }
+    let c = compare_files(test, reference, exposure, tonemap)?;
+    println!("{} against {} ({} pixels)", test.display(), reference.display(), c.pixels);
+    println!("  RMSE   {:.6} (linear radiance)", c.rmse);
+    println!("  relMSE {:.6} (linear radiance, epsilon {})", c.relmse, dvsgi::metrics::RELMSE_EPSILON);
+    let row = |name: &str, s: &dvsgi::metrics::Summary| {
+        println!(
+            "  {name:<6} mean {:.4}  p50 {:.4}  p90 {:.4}  p95 {:.4}  p99 {:.4}  max {:.4}",
+            s.mean, s.p50, s.p90, s.p95, s.p99, s.max
+        )
+    };
+    row("FLIP", &c.flip);
+    row("SSIM", &c.ssim);
+    println!("  (FLIP: 0 = identical, lower is better; SSIM: 1 = identical, higher is better)");
+    if let Some(d) = diff {
+        let t = LinearImage::read_exr(test)?;
+        let r = LinearImage::read_exr(reference)?;
+        dvsgi::output::write_png(d, &flip_error_map(&t, &r, exposure, tonemap)?)?;
+        println!("wrote {}", d.display());
+    }
+    if let Some(j) = json {
+        let text = serde_json::to_string_pretty(&c).expect("JSON");
+        dvsgi::sweep::write_atomic(j, text.as_bytes())?;
+        println!("wrote {}", j.display());
+    }
+    Ok(())
+}
+
+fn print_sweep(results: &dvsgi::sweep::Results) {
+    println!("{} configurations; Pareto-optimal for mean FLIP against frame time:", results.rows.len());
+    println!(
+        "  {:<28} {:>10} {:>10} {:>9} {:>9} {:>7}",
+        "configuration", "frame ms", "static ms", "RMSE", "FLIP", "SSIM"
+    );
+    let mut front: Vec<_> = results.rows.iter().filter(|r| r.front_flip).collect();
+    front.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
+    for r in front {
+        println!(
+            "  {:<28} {:>10.1} {:>10.1} {:>9.5} {:>9.4} {:>7.4}",
+            r.label, r.frame_ms, r.static_frame_ms, r.rmse, r.flip_mean, r.ssim_mean
+        );
+    }
+}
+
+/// `--width/--height/--time` as scene overrides.
+fn size_overrides(width: Option<u32>, height: Option<u32>, time: Option<f32>) -> Vec<(String, String)> {
+    let mut extra = Vec::new();
+    if let Some(w) = width {
+        extra.push(("render.width".to_string(), w.to_string()));
+    }
+    if let Some(h) = height {
+        extra.push(("render.height".to_string(), h.to_string()));
+    }
+    if let Some(t) = time {
+        extra.push(("render.time".to_string(), format!("{t:?}")));
+    }
+    extra
+}
+
+fn reference(
+    common: &CommonArgs,
+    scene: &std::path::Path,
+    outs: &[PathBuf],
+    options: dvsgi::reference::ReferenceOptions,
+    extra: Vec<(String, String)>,
+) -> dvsgi::Result<()> {
+    for o in outs {
+        dvsgi::output::check_target(o)?;
+    }
+    let scene = common.load_scene(scene, &extra)?;
+    let ctx = common.context()?;
+    let start = std::time::Instant::now();
+    let mut tracer = dvsgi::reference::PathTracer::new(&ctx, &scene, options)?;
+    println!(
+        "reference: {} triangles, BVH {} nodes (depth {}), {}x{}, {} spp, bounces {}, device {}",
+        tracer.triangle_count,
+        tracer.bvh_nodes,
+        tracer.bvh_depth,
+        scene.settings.width,
+        scene.settings.height,
+        options.spp,
+        options.max_bounces.map(|b| b.to_string()).unwrap_or_else(|| "unlimited (Russian roulette)".into()),
+        ctx.info.name
+    );
+    let bar = indicatif::ProgressBar::new(options.spp as u64).with_style(
+        indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} spp, eta {eta}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    tracer.run(|done, _| bar.set_position(done as u64))?;
+    bar.finish_and_clear();
+    let image = tracer.image()?;
+    check_validation(&ctx)?;
+    let secs = start.elapsed().as_secs_f64();
+    let paths = image.spp as f64 * (image.width * image.height) as f64;
+    println!(
+        "traced {} spp in {secs:.1} s ({:.2} M paths/s, host wall clock); mean relative standard error {:.4}",
+        image.spp,
+        paths / secs / 1e6,
+        image.relative_standard_error()
+    );
+    if image.rejected > 0 {
+        eprintln!("warning: {} samples had non-finite radiance and were left out", image.rejected);
+    }
+    for out in outs {
+        if dvsgi::output::format_of(out)? == dvsgi::output::Format::Exr {
+            let var_path = dvsgi::reference::variance_path(out);
+            dvsgi::output::write_exr(out, image.width, image.height, &image.mean)?;
+            dvsgi::output::write_exr(&var_path, image.width, image.height, &image.variance)?;
+            println!("wrote {} and {} (variance of the pixel mean)", out.display(), var_path.display());
+        } else {
+            let linear =
+                dvsgi::metrics::LinearImage { width: image.width, height: image.height, rgb: image.mean.clone() };
+            let s = &scene.settings;
+            let rgb = dvsgi::metrics::display_srgb8(&linear, s.exposure, s.tonemap);
+            let png = image::RgbImage::from_raw(image.width, image.height, rgb).expect("display size");
+            dvsgi::output::write_png(out, &png)?;
+            println!("wrote {}", out.display());
+        }
+    }
+    Ok(())
 }
 
 fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {

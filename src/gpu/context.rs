@@ -504,7 +504,8 @@ impl Context {
             .shader_storage_image_write_without_format(has10.shader_storage_image_write_without_format != 0)
             .shader_storage_image_read_without_format(has10.shader_storage_image_read_without_format != 0)
             .independent_blend(has10.independent_blend != 0)
-            .shader_storage_image_extended_formats(has10.shader_storage_image_extended_formats != 0);
+            .shader_storage_image_extended_formats(has10.shader_storage_image_extended_formats != 0)
+            .shader_sampled_image_array_dynamic_indexing(has10.shader_sampled_image_array_dynamic_indexing != 0);
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
             .timeline_semaphore(true)
             .scalar_block_layout(has12.scalar_block_layout != 0)

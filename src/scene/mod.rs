@@ -7,6 +7,8 @@ mod error;
 pub use error::SceneError;
 mod file;
 mod obj;
+mod preset;
+pub use preset::Preset;
 
 use std::path::{Path, PathBuf};
 

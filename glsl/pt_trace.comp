@@ -1,0 +1,336 @@
+#version 460
+// Reference path tracer (the ground truth for the accuracy sweep). Unbiased for dvsgi's scene
+// model: two-sided triangles, Lambert albedo/pi + energy-normalised Blinn-Phong (brdf.glsl),
+// two-sided Lambertian emission, and directional/point/spot lights (lights.glsl) sampled by
+// next-event estimation. Emissive surfaces are found by the paths themselves. Paths end by
+// Russian roulette; `size.w` caps the number of indirect bounces (0 = direct light only).
+// Each invocation traces `pc.samples` paths through one pixel (through its centre, as the
+// rasterizer samples, or spread over it with `info.y`) and
+// adds their radiance and squared radiance to two accumulators, so the host can form the
+// mean and the variance of the mean.
+#include "common.glsl"
+#include "brdf.glsl"
+#include "lights.glsl"
+#include "scene.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(constant_id = 0) const uint TEXTURE_COUNT = 1;
+
+// Mirrors reference::PtParams.
+struct PtParams {
+    mat4 inv_view_proj;
+    vec4 camera;  // xyz unused (rays start on the near plane), w ray offset (scene units)
+    uvec4 size;   // x width, y height, z light count, w max indirect bounces
+    uvec4 info;   // x seed, y 1: jitter over the pixel (box filter), 0: through its centre
+};
+
+struct BvhNode {
+    vec4 lo;  // xyz min, w bits: first triangle (leaf) or left child (inner)
+    vec4 hi;  // xyz max, w bits: triangle count (leaf) or 0 (inner)
+};
+
+struct Tri {
+    vec4 v0;  // w bits: material index
+    vec4 e1;
+    vec4 e2;
+};
+
+struct TriShade {
+    vec4 n0;
+    vec4 n1;
+    vec4 n2;
+    vec4 uv01;
+    vec4 uv2;
+};
+
+layout(set = 0, binding = 0) uniform ParamBlock { PtParams params; };
+layout(set = 0, binding = 1, std430) readonly buffer Nodes { BvhNode nodes[]; };
+layout(set = 0, binding = 2, std430) readonly buffer Tris { Tri tris[]; };
+layout(set = 0, binding = 3, std430) readonly buffer Shades { TriShade shades[]; };
+layout(set = 0, binding = 4, std430) readonly buffer Materials { Material materials[]; };
+layout(set = 0, binding = 5, std430) readonly buffer Lights { Light lights[]; };
+layout(set = 0, binding = 6) uniform sampler2D textures[TEXTURE_COUNT];
+layout(set = 0, binding = 7, rgba32f) uniform image2D accum;     // rgb sum, a accepted samples
+layout(set = 0, binding = 8, rgba32f) uniform image2D accum_sq;  // rgb sum of squares, a rejected samples
+
+layout(push_constant) uniform Push {
+    uint first_sample;
+    uint samples;
+} pc;
+
+const uint STACK_SIZE = 48u;  // reference::bvh::MAX_DEPTH
+const float T_FAR = 3.0e38;
+
+// PCG hash (Jarzynski and Olano 2020).
+uint pcg(uint v) {
+    uint state = v * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+float rand(inout uint rng) {
+    rng = pcg(rng);
+    return float(rng >> 8) * (1.0 / 16777216.0);
+}
+
+// An orthonormal frame around unit n (Duff et al. 2017).
+mat3 frame_of(vec3 n) {
+    float s = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (s + n.z);
+    float b = n.x * n.y * a;
+    vec3 t = vec3(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
+    vec3 bt = vec3(b, s + n.y * n.y * a, -n.y);
+    return mat3(t, bt, n);
+}
+
+// Reciprocal that keeps the slab test free of 0 * inf.
+vec3 safe_inverse(vec3 d) {
+    return vec3(d.x != 0.0 ? 1.0 / d.x : 1e30, d.y != 0.0 ? 1.0 / d.y : 1e30, d.z != 0.0 ? 1.0 / d.z : 1e30);
+}
+
+float box_entry(BvhNode n, vec3 o, vec3 inv, float t_max) {
+    vec3 a = (n.lo.xyz - o) * inv;
+    vec3 b = (n.hi.xyz - o) * inv;
+    vec3 mn = min(a, b);
+    vec3 mx = max(a, b);
+    float t0 = max(max(mn.x, mn.y), max(mn.z, 0.0));
+    float t1 = min(min(mx.x, mx.y), min(mx.z, t_max));
+    return t0 <= t1 ? t0 : -1.0;
+}
+
+struct Hit {
+    float t;
+    uint tri;
+    vec2 uv;
+};
+
+// Closest hit before t_max (or any hit, with `any_hit`). Möller–Trumbore, both faces.
+bool trace(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
+    hit.t = t_max;
+    hit.tri = 0u;
+    hit.uv = vec2(0.0);
+    bool found = false;
+    vec3 inv = safe_inverse(d);
+    if (box_entry(nodes[0], o, inv, t_max) < 0.0) return false;
+    uint stack_node[STACK_SIZE];
+    float stack_t[STACK_SIZE];
+    uint sp = 0u;
+    uint node = 0u;
+    for (;;) {
+        BvhNode n = nodes[node];
+        uint count = floatBitsToUint(n.hi.w);
+        uint first = floatBitsToUint(n.lo.w);
+        bool descend = false;
+        // A leaf, or the empty root of a scene without triangles (no inner node points at 0).
+        if (count > 0u || first == 0u) {
+            for (uint i = first; i < first + count; ++i) {
+                Tri tri = tris[i];
+                vec3 p = cross(d, tri.e2.xyz);
+                float det = dot(tri.e1.xyz, p);
+                if (abs(det) < 1e-20) continue;
+                float inv_det = 1.0 / det;
+                vec3 s = o - tri.v0.xyz;
+                float u = dot(s, p) * inv_det;
+                if (u < 0.0 || u > 1.0) continue;
+                vec3 q = cross(s, tri.e1.xyz);
+                float v = dot(d, q) * inv_det;
+                if (v < 0.0 || u + v > 1.0) continue;
+                float t = dot(tri.e2.xyz, q) * inv_det;
+                if (t > 0.0 && t < hit.t) {
+                    hit.t = t;
+                    hit.tri = i;
+                    hit.uv = vec2(u, v);
+                    found = true;
+                    if (any_hit) return true;
+                }
+            }
+        } else {
+            float tl = box_entry(nodes[first], o, inv, hit.t);
+            float tr = box_entry(nodes[first + 1u], o, inv, hit.t);
+            if (tl >= 0.0 && tr >= 0.0) {
+                bool left_near = tl <= tr;
+                if (sp < STACK_SIZE) {
+                    stack_node[sp] = left_near ? first + 1u : first;
+                    stack_t[sp] = left_near ? tr : tl;
+                    ++sp;
+                }
+                node = left_near ? first : first + 1u;
+                descend = true;
+            } else if (tl >= 0.0) {
+                node = first;
+                descend = true;
+            } else if (tr >= 0.0) {
+                node = first + 1u;
+                descend = true;
+            }
+        }
+        if (descend) continue;
+        bool popped = false;
+        while (sp > 0u) {
+            --sp;
+            if (stack_t[sp] <= hit.t) {
+                node = stack_node[sp];
+                popped = true;
+                break;
+            }
+        }
+        if (!popped) break;
+    }
+    return found;
+}
+
+struct Surface {
+    vec3 P;
+    vec3 ng;  // geometric normal, towards the incoming ray
+    vec3 ns;  // shading normal, on the same side as ng
+    vec3 albedo;
+    vec3 ks;
+    float shininess;
+    vec3 emission;
+};
+
+// The surface at a hit, with the same material rules as the G-buffer (gbuffer.frag).
+Surface surface_at(Hit h, vec3 o, vec3 d) {
+    Tri tri = tris[h.tri];
+    TriShade sh = shades[h.tri];
+    Surface s;
+    float w = 1.0 - h.uv.x - h.uv.y;
+    s.P = tri.v0.xyz + tri.e1.xyz * h.uv.x + tri.e2.xyz * h.uv.y;
+    vec3 ng = safe_normalize(cross(tri.e1.xyz, tri.e2.xyz), -d);
+    if (dot(ng, d) > 0.0) ng = -ng;
+    vec3 n = safe_normalize(sh.n0.xyz * w + sh.n1.xyz * h.uv.x + sh.n2.xyz * h.uv.y, ng);
+    if (dot(n, ng) < 0.0) n = -n;
+    s.ng = ng;
+    s.ns = n;
+    Material m = materials[floatBitsToUint(tri.v0.w)];
+    vec3 albedo = m.albedo.rgb;
+    int tex = m.texture.x;
+    if (tex >= 0) {
+        vec2 uv = sh.uv01.xy * w + sh.uv01.zw * h.uv.x + sh.uv2.xy * h.uv.y;
+        // A uniform loop index: no non-uniform descriptor indexing needed.
+        for (uint i = 0u; i < TEXTURE_COUNT; ++i) {
+            if (i == uint(tex)) albedo *= textureLod(textures[i], uv, 0.0).rgb;
+        }
+    }
+    s.albedo = clamp(albedo, 0.0, 1.0);
+    s.ks = clamp(m.specular.rgb, 0.0, 1.0);
+    s.shininess = clamp(m.specular.a, 0.0, HALF_MAX);
+    s.emission = min(max(m.emission.rgb, 0.0), vec3(HALF_MAX));
+    return s;
+}
+
+// Density (per solid angle) of sampling `wi` from the Blinn-Phong half-vector distribution.
+float specular_pdf(vec3 n, vec3 V, vec3 wi, float shininess) {
+    vec3 h = safe_normalize(V + wi, n);
+    float cos_h = max(dot(n, h), 0.0);
+    float vdoth = dot(V, h);
+    if (vdoth <= 0.0) return 0.0;
+    return (shininess + 1.0) * INV_PI * 0.5 * pow(cos_h, shininess) / (4.0 * vdoth);
+}
+
+float mean3(vec3 c) {
+    return (c.r + c.g + c.b) * (1.0 / 3.0);
+}
+
+vec3 radiance(vec3 o, vec3 d, float t_max, inout uint rng) {
+    vec3 L = vec3(0.0);
+    vec3 beta = vec3(1.0);
+    uint max_bounces = params.size.w;
+    uint light_count = params.size.z;
+    float eps0 = params.camera.w;
+    for (uint depth = 0u; depth < 1024u; ++depth) {
+        Hit h;
+        if (!trace(o, d, t_max, false, h)) break;
+        Surface s = surface_at(h, o, d);
+        vec3 V = -d;
+        L += beta * s.emission;
+        float eps = eps0 + 1e-6 * max(abs(s.P.x), max(abs(s.P.y), abs(s.P.z)));
+        vec3 origin = s.P + s.ng * eps;
+        // Next-event estimation: every light once.
+        for (uint i = 0u; i < light_count; ++i) {
+            Light l = lights[i];
+            LightSample ls = sample_light(l, s.P);
+            float cos_theta = dot(s.ns, ls.wi);
+            if (cos_theta <= 0.0 || dot(s.ng, ls.wi) <= 0.0) continue;
+            if (max(ls.irradiance.r, max(ls.irradiance.g, ls.irradiance.b)) <= 0.0) continue;
+            if (l.shadow.x >= 0) {
+                float reach = ls.distance > 0.0 ? ls.distance * (1.0 - 1e-5) - 2.0 * eps : T_FAR;
+                Hit blocker;
+                if (reach > 0.0 && trace(origin, ls.wi, reach, true, blocker)) continue;
+            }
+            vec3 f = brdf_diffuse(s.albedo) + brdf_specular(s.ks, s.shininess, s.ns, V, ls.wi);
+            L += beta * f * ls.irradiance * cos_theta;
+        }
+        if (depth >= max_bounces) break;
+        // Continue the path: pick the diffuse or the specular lobe, evaluate the whole BRDF
+        // over the mixture density (unbiased for any choice probability).
+        float wd = mean3(s.albedo);
+        float ws = mean3(s.ks);
+        if (wd + ws <= 0.0) break;
+        float p_spec = ws / (wd + ws);
+        mat3 tbn = frame_of(s.ns);
+        vec3 wi;
+        float u1 = rand(rng), u2 = rand(rng);
+        if (rand(rng) < p_spec) {
+            float cos_h = pow(max(u1, 1e-30), 1.0 / (s.shininess + 1.0));
+            float sin_h = sqrt(max(0.0, 1.0 - cos_h * cos_h));
+            float phi = 2.0 * PI * u2;
+            vec3 hv = tbn * vec3(sin_h * cos(phi), sin_h * sin(phi), cos_h);
+            wi = 2.0 * dot(V, hv) * hv - V;
+        } else {
+            float r = sqrt(u1);
+            float phi = 2.0 * PI * u2;
+            wi = tbn * vec3(r * cos(phi), r * sin(phi), sqrt(max(0.0, 1.0 - u1)));
+        }
+        float cos_i = dot(s.ns, wi);
+        if (cos_i <= 0.0 || dot(s.ng, wi) <= 0.0) break;
+        float pdf = (1.0 - p_spec) * cos_i * INV_PI + p_spec * specular_pdf(s.ns, V, wi, s.shininess);
+        if (!(pdf > 0.0)) break;
+        vec3 f = brdf_diffuse(s.albedo) + brdf_specular(s.ks, s.shininess, s.ns, V, wi);
+        beta *= f * cos_i / pdf;
+        if (depth >= 2u) {
+            float q = min(max(beta.r, max(beta.g, beta.b)), 0.95);
+            if (!(rand(rng) < q)) break;
+            beta /= q;
+        }
+        o = origin;
+        d = normalize(wi);
+        t_max = T_FAR;
+    }
+    return L;
+}
+
+void main() {
+    uvec2 px = gl_GlobalInvocationID.xy;
+    uvec2 size = params.size.xy;
+    if (any(greaterThanEqual(px, size))) return;
+    vec3 sum = vec3(0.0), sum_sq = vec3(0.0);
+    float accepted = 0.0, rejected = 0.0;
+    for (uint k = 0u; k < pc.samples; ++k) {
+        uint sample_index = pc.first_sample + k;
+        uint rng = pcg(params.info.x ^ pcg(px.x + pcg(px.y + pcg(sample_index))));
+        vec2 jitter = vec2(rand(rng), rand(rng));
+        if (params.info.y == 0u) jitter = vec2(0.5);
+        vec2 ndc = (vec2(px) + jitter) / vec2(size) * 2.0 - 1.0;
+        // From the near plane to the far plane: the rasterizer's visible range.
+        vec4 near_h = params.inv_view_proj * vec4(ndc, 0.0, 1.0);
+        vec4 far_h = params.inv_view_proj * vec4(ndc, 1.0, 1.0);
+        vec3 o = near_h.xyz / near_h.w;
+        vec3 span = far_h.xyz / far_h.w - o;
+        float len = length(span);
+        vec3 L = radiance(o, span / len, len, rng);
+        if (any(isnan(L)) || any(isinf(L))) {
+            rejected += 1.0;
+            continue;
+        }
+        sum += L;
+        sum_sq += L * L;
+        accepted += 1.0;
+    }
+    ivec2 p = ivec2(px);
+    vec4 a = pc.first_sample == 0u ? vec4(0.0) : imageLoad(accum, p);
+    vec4 b = pc.first_sample == 0u ? vec4(0.0) : imageLoad(accum_sq, p);
+    imageStore(accum, p, a + vec4(sum, accepted));
+    imageStore(accum_sq, p, b + vec4(sum_sq, rejected));
+}

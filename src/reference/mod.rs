@@ -1,0 +1,382 @@
+//! The reference path tracer: the ground truth the accuracy sweep measures against.
+//!
+//! Unbiased for dvsgi's scene model (`glsl/pt_trace.comp` lists the rules): the same
+//! triangles, materials, textures and light table as the renderer, at one scene time. The
+//! scene is flattened to world-space triangles under a host-built BVH ([`bvh`]), and the GPU
+//! traces it progressively in compute, in batches of samples per pixel sized to take about
+//! `batch_ms` each (a long dispatch would look like a hung device). Each pixel keeps the sum
+//! and the sum of squares of its samples, from which [`ReferenceImage`] forms the mean and the
+//! variance of that mean.
+
+pub mod bvh;
+
+use crate::gpu::{shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuResult, Image, ImageDesc, Pipeline};
+use crate::render::graph::{Pass, Use};
+use crate::render::passes::readback::{HostReadPass, ImageDownload};
+use crate::render::scene_gpu::{upload_buffer, SceneGpu};
+use crate::render::{lights, Mode, Scheduler};
+use crate::scene::Scene;
+use ash::vk;
+use bvh::Bvh;
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat3, Vec2, Vec3};
+use std::cell::Cell;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// What to trace.
+#[derive(Debug, Clone, Copy)]
+pub struct ReferenceOptions {
+    /// Samples (paths) per pixel.
+    pub spp: u32,
+    /// Indirect bounces at most (`None`: until Russian roulette ends the path; 0: direct
+    /// light and visible emission only, the renderer's `gi.mode = "none"`).
+    pub max_bounces: Option<u32>,
+    /// Seed of the per-pixel random sequences (different seeds give independent images).
+    pub seed: u32,
+    /// Aim for GPU batches of about this many milliseconds.
+    pub batch_ms: f64,
+    /// Spread each pixel's paths over its area (a box filter: antialiased edges). Off, every
+    /// path leaves through the pixel's centre, where the rasterizer samples, so edges alias
+    /// exactly as in the renderer's image and the error measures the lighting alone.
+    pub jitter: bool,
+}
+
+impl Default for ReferenceOptions {
+    fn default() -> Self {
+        ReferenceOptions { spp: 256, max_bounces: None, seed: 1, batch_ms: 400.0, jitter: false }
+    }
+}
+
+/// Where the variance image of reference `out` goes: `ref.exr` -> `ref.var.exr`.
+pub fn variance_path(out: &std::path::Path) -> std::path::PathBuf {
+    out.with_extension("var.exr")
+}
+
+/// Bounces when unlimited: Russian roulette ends paths long before (the shader's loop bound).
+const UNLIMITED_BOUNCES: u32 = 1023;
+
+/// The converged estimate and its uncertainty.
+#[derive(Debug, Clone)]
+pub struct ReferenceImage {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel traced.
+    pub spp: u32,
+    /// Linear radiance W/(sr m^2), RGB f32 per pixel, top row first.
+    pub mean: Vec<f32>,
+    /// Variance of the mean per pixel and channel: s^2 / n with s^2 the unbiased sample variance.
+    pub variance: Vec<f32>,
+    /// Samples whose radiance was not finite (left out of the mean; should be 0).
+    pub rejected: u64,
+}
+
+impl ReferenceImage {
+    /// Mean over pixels of the standard error relative to the pixel's mean luminance (pixels
+    /// brighter than 1% of the image's mean), a one-number convergence summary.
+    pub fn relative_standard_error(&self) -> f64 {
+        let lum = |c: &[f32]| (c[0] as f64 + c[1] as f64 + c[2] as f64) / 3.0;
+        let n = (self.width * self.height) as usize;
+        let image_mean = (0..n).map(|i| lum(&self.mean[i * 3..i * 3 + 3])).sum::<f64>() / n.max(1) as f64;
+        let (mut sum, mut count) = (0.0, 0u64);
+        for i in 0..n {
+            let m = lum(&self.mean[i * 3..i * 3 + 3]);
+            if m > 0.01 * image_mean && m > 0.0 {
+                sum += lum(&self.variance[i * 3..i * 3 + 3]).sqrt() / m;
+                count += 1;
+            }
+        }
+        if count == 0 {
+            0.0
+        } else {
+            sum / count as f64
+        }
+    }
+}
+
+/// Mirrors `PtParams` in glsl/pt_trace.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug)]
+struct PtParams {
+    inv_view_proj: [[f32; 4]; 4],
+    camera: [f32; 4],
+    size: [u32; 4],
+    info: [u32; 4],
+}
+
+/// Mirrors `Tri` in glsl/pt_trace.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug)]
+struct GpuTri {
+    v0: [f32; 4],
+    e1: [f32; 4],
+    e2: [f32; 4],
+}
+
+/// Mirrors `TriShade` in glsl/pt_trace.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug)]
+struct GpuTriShade {
+    n0: [f32; 4],
+    n1: [f32; 4],
+    n2: [f32; 4],
+    uv01: [f32; 4],
+    uv2: [f32; 4],
+}
+
+/// World-space triangles of a scene at time `t`, with shading normals, UVs and material.
+pub struct Triangles {
+    pub corners: Vec<[Vec3; 3]>,
+    normals: Vec<[Vec3; 3]>,
+    uvs: Vec<[Vec2; 3]>,
+    materials: Vec<u32>,
+}
+
+impl Triangles {
+    pub fn of(scene: &Scene, t: f32) -> Triangles {
+        let mut out = Triangles { corners: Vec::new(), normals: Vec::new(), uvs: Vec::new(), materials: Vec::new() };
+        for object in &scene.objects {
+            let m = object.model_matrix(t);
+            let nm = Mat3::from_mat4(m).inverse().transpose();
+            for &mi in &object.meshes {
+                let mesh = &scene.meshes[mi as usize];
+                for tri in mesh.indices.chunks_exact(3) {
+                    let idx = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
+                    out.corners.push(idx.map(|i| m.transform_point3(mesh.positions[i])));
+                    out.normals.push(idx.map(|i| nm * mesh.normals.get(i).copied().unwrap_or(Vec3::ZERO)));
+                    out.uvs.push(idx.map(|i| mesh.uvs.get(i).copied().unwrap_or(Vec2::ZERO)));
+                    out.materials.push(mesh.material);
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The one compute pass: trace `samples` paths per pixel into the accumulators.
+struct TracePass {
+    buffers: Vec<Arc<Buffer>>,
+    accum: Arc<Image>,
+    accum_sq: Arc<Image>,
+    pipeline: Pipeline,
+    set: DescriptorSet,
+    size: [u32; 2],
+    /// (first sample, samples) of the next dispatch.
+    batch: Cell<[u32; 2]>,
+}
+
+impl Pass for TracePass {
+    fn name(&self) -> &str {
+        "path trace"
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        let mut uses = vec![
+            Use::image(&self.accum, Access::ComputeShaderWrite),
+            Use::image(&self.accum_sq, Access::ComputeShaderWrite),
+        ];
+        uses.extend(self.buffers.iter().map(|b| Use::buffer(b, Access::ComputeShaderReadBuffer)));
+        uses
+    }
+    fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
+        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.push(cmd, &self.batch.get());
+        self.pipeline.dispatch(cmd, [self.size[0], self.size[1], 1], [8, 8, 1]);
+    }
+}
+
+/// A progressive path tracer for one scene.
+pub struct PathTracer {
+    ctx: Arc<Context>,
+    pass: TracePass,
+    // Keeps the material table and textures the descriptor set points at alive.
+    _scene_gpu: SceneGpu,
+    scheduler: Scheduler,
+    options: ReferenceOptions,
+    done: u32,
+    /// Host milliseconds per sample per pixel, from the last batch.
+    ms_per_sample: Option<f64>,
+    pub triangle_count: usize,
+    pub bvh_nodes: usize,
+    pub bvh_depth: usize,
+}
+
+impl PathTracer {
+    pub fn new(ctx: &Arc<Context>, scene: &Scene, options: ReferenceOptions) -> GpuResult<PathTracer> {
+        let s = &scene.settings;
+        let (width, height) = (s.width, s.height);
+        let max2d = ctx.info.limits.max_image_dimension2_d;
+        if width == 0 || height == 0 || width > max2d || height > max2d {
+            return Err(crate::gpu::GpuError::Limit(format!(
+                "image size {width}x{height} is outside 1..={max2d} (this device's maxImageDimension2D)"
+            )));
+        }
+        if options.spp == 0 {
+            return Err(crate::gpu::GpuError::Limit("samples per pixel must be at least 1".into()));
+        }
+        let t = s.time;
+        let tris = Triangles::of(scene, t);
+        let bvh = Bvh::build(&tris.corners);
+        let mut gpu_tris = Vec::with_capacity(tris.corners.len().max(1));
+        let mut shades = Vec::with_capacity(tris.corners.len().max(1));
+        for &i in &bvh.order {
+            let i = i as usize;
+            let [a, b, c] = tris.corners[i];
+            let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
+            gpu_tris.push(GpuTri {
+                v0: v4(a, f32::from_bits(tris.materials[i])),
+                e1: v4(b - a, 0.0),
+                e2: v4(c - a, 0.0),
+            });
+            let [n0, n1, n2] = tris.normals[i];
+            let [t0, t1, t2] = tris.uvs[i];
+            shades.push(GpuTriShade {
+                n0: v4(n0, 0.0),
+                n1: v4(n1, 0.0),
+                n2: v4(n2, 0.0),
+                uv01: [t0.x, t0.y, t1.x, t1.y],
+                uv2: [t2.x, t2.y, 0.0, 0.0],
+            });
+        }
+        if gpu_tris.is_empty() {
+            gpu_tris.push(GpuTri::zeroed());
+            shades.push(GpuTriShade::zeroed());
+        }
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let nodes = Arc::new(upload_buffer(ctx, "reference bvh", bytemuck::cast_slice(&bvh.nodes), storage)?);
+        let tri_buf = Arc::new(upload_buffer(ctx, "reference triangles", bytemuck::cast_slice(&gpu_tris), storage)?);
+        let shade_buf = Arc::new(upload_buffer(ctx, "reference shading", bytemuck::cast_slice(&shades), storage)?);
+        let bounds = scene.world_bounds(t);
+        let (mut gpu_lights, _) = lights::build(scene, t, bounds, s.shadow_map_size, s.shadow_filter_radius);
+        let light_count = gpu_lights.len() as u32;
+        if gpu_lights.is_empty() {
+            gpu_lights.push(lights::GpuLight::default());
+        }
+        let light_buf = Arc::new(upload_buffer(ctx, "reference lights", bytemuck::cast_slice(&gpu_lights), storage)?);
+        let scene_gpu = SceneGpu::new(ctx, scene)?;
+
+        let cam = &scene.camera;
+        let view_proj = cam.projection(width as f32 / height as f32) * cam.view();
+        let extent = if bounds.is_empty() { 1.0 } else { bounds.extent().max_element().max(1e-6) };
+        let params = PtParams {
+            inv_view_proj: view_proj.inverse().to_cols_array_2d(),
+            camera: [0.0, 0.0, 0.0, 1e-5 * extent],
+            size: [width, height, light_count, options.max_bounces.unwrap_or(UNLIMITED_BOUNCES).min(UNLIMITED_BOUNCES)],
+            info: [options.seed, options.jitter as u32, tris.corners.len() as u32, 0],
+        };
+        let uniform = Arc::new(Buffer::uniform(ctx, "reference parameters", &params)?);
+        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+        let image = |name: &str| -> GpuResult<Arc<Image>> {
+            Ok(Arc::new(Image::new(ctx, name, ImageDesc::d2(vk::Format::R32G32B32A32_SFLOAT, width, height, usage))?))
+        };
+        let accum = image("reference sum")?;
+        let accum_sq = image("reference sum of squares")?;
+        let views = scene_gpu.texture_views();
+        let set = DescriptorSet::new(
+            ctx,
+            "path trace",
+            vk::ShaderStageFlags::COMPUTE,
+            &[
+                Bind::Uniform(&uniform),
+                Bind::Storage(&nodes),
+                Bind::Storage(&tri_buf),
+                Bind::Storage(&shade_buf),
+                Bind::Storage(&scene_gpu.materials),
+                Bind::Storage(&light_buf),
+                Bind::SampledArray(
+                    views.clone(),
+                    scene_gpu.texture_sampler.raw,
+                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                ),
+                Bind::StorageImage(accum.view),
+                Bind::StorageImage(accum_sq.view),
+            ],
+        )?;
+        let pipeline =
+            Pipeline::compute(ctx, "path trace", shaders::PT_TRACE_COMP, &[set.layout], 8, &[(0, views.len() as u32)])?;
+        let pass = TracePass {
+            buffers: vec![uniform, nodes, tri_buf, shade_buf, light_buf],
+            accum,
+            accum_sq,
+            pipeline,
+            set,
+            size: [width, height],
+            batch: Cell::new([0, 0]),
+        };
+        Ok(PathTracer {
+            ctx: ctx.clone(),
+            pass,
+            _scene_gpu: scene_gpu,
+            scheduler: Scheduler::new(ctx, Mode::Sync, 1)?,
+            options,
+            done: 0,
+            ms_per_sample: None,
+            triangle_count: tris.corners.len(),
+            bvh_nodes: bvh.nodes.len(),
+            bvh_depth: bvh.depth(),
+        })
+    }
+
+    /// Samples per pixel traced so far.
+    pub fn samples_done(&self) -> u32 {
+        self.done
+    }
+
+    /// Trace the next batch (sized from the last one's time) and wait for it; returns the
+    /// samples per pixel traced in it (0 once `spp` is reached).
+    pub fn step(&mut self) -> GpuResult<u32> {
+        let left = self.options.spp - self.done;
+        if left == 0 {
+            return Ok(0);
+        }
+        let n = match self.ms_per_sample {
+            None => 1,
+            Some(ms) => ((self.options.batch_ms / ms.max(1e-3)).floor() as u32).clamp(1, 256),
+        }
+        .min(left);
+        self.pass.batch.set([self.done, n]);
+        let start = Instant::now();
+        self.scheduler.begin(None)?;
+        self.scheduler.record(&[&self.pass])?;
+        self.scheduler.end(true)?;
+        self.ms_per_sample = Some(start.elapsed().as_secs_f64() * 1e3 / n as f64);
+        self.done += n;
+        Ok(n)
+    }
+
+    /// Trace every remaining sample, calling `progress(done, total)` after each batch.
+    pub fn run(&mut self, mut progress: impl FnMut(u32, u32)) -> GpuResult<()> {
+        while self.step()? > 0 {
+            progress(self.done, self.options.spp);
+        }
+        Ok(())
+    }
+
+    /// The estimate from the samples traced so far (waits for a copy).
+    pub fn image(&mut self) -> GpuResult<ReferenceImage> {
+        let sum = ImageDownload::new(&self.ctx, &self.pass.accum)?;
+        let sum_sq = ImageDownload::new(&self.ctx, &self.pass.accum_sq)?;
+        let host = HostReadPass { buffers: vec![sum.buffer.clone(), sum_sq.buffer.clone()] };
+        self.scheduler.begin(None)?;
+        self.scheduler.record(&[&sum, &sum_sq, &host])?;
+        self.scheduler.end(true)?;
+        let a: Vec<f32> = bytemuck::pod_collect_to_vec(sum.bytes());
+        let b: Vec<f32> = bytemuck::pod_collect_to_vec(sum_sq.bytes());
+        let [width, height] = self.pass.size;
+        let mut mean = Vec::with_capacity(a.len() / 4 * 3);
+        let mut variance = Vec::with_capacity(a.len() / 4 * 3);
+        let mut rejected = 0u64;
+        for (pa, pb) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
+            let n = pa[3] as f64;
+            rejected += pb[3] as u64;
+            for c in 0..3 {
+                let (s, s2) = (pa[c] as f64, pb[c] as f64);
+                let m = if n > 0.0 { s / n } else { 0.0 };
+                // Unbiased sample variance, divided by n for the variance of the mean.
+                let var = if n > 1.0 { ((s2 - s * m) / (n - 1.0)).max(0.0) / n } else { 0.0 };
+                mean.push(m as f32);
+                variance.push(var as f32);
+            }
+        }
+        Ok(ReferenceImage { width, height, spp: self.done, mean, variance, rejected })
+    }
+}

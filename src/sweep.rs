@@ -1,0 +1,673 @@
+//! The speed/accuracy sweep: render a scene under a grid of cone-tracing settings, time each
+//! configuration with the bench's timing code ([`crate::bench::measure_renderer`]), compare its
+//! image with the path-traced reference ([`crate::reference`], rendered once per setup and
+//! cached in the output directory), and mark the Pareto-optimal configurations per metric.
+//!
+//! Output directory: `results.csv` (one row per configuration, appended and flushed as each
+//! finishes, so an interrupted sweep resumes where it stopped), `results.json` (the setup, the
+//! rows and the fronts), `frontier-<metric>.svg` (time against error, front highlighted),
+//! `reference.exr` / `reference.var.exr` / `reference.json` (the cached ground truth) and
+//! `sweep.json` (the setup a resumed sweep must match).
+
+use crate::metrics::Comparison;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    #[error("--grid {arg}: {message}")]
+    BadAxis { arg: String, message: String },
+    #[error(
+        "{dir} holds a sweep with a different setup ({what} was {old}, now {new}); use another --out \
+         directory or delete {dir}"
+    )]
+    SetupChanged { dir: PathBuf, what: String, old: String, new: String },
+    #[error("{path}: {message}")]
+    File { path: PathBuf, message: String },
+}
+
+/// One knob the sweep varies: the `[gi]` key it sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Param {
+    VoxelResolution,
+    DiffuseCones,
+    /// `gi.diffuse_cone_angle`, degrees (0 = automatic).
+    DiffuseConeAngle,
+    /// `gi.step` (beta).
+    Step,
+    Bounces,
+    Downsample,
+}
+
+impl Param {
+    pub const ALL: [Param; 6] = [
+        Param::VoxelResolution,
+        Param::DiffuseCones,
+        Param::DiffuseConeAngle,
+        Param::Step,
+        Param::Bounces,
+        Param::Downsample,
+    ];
+    /// The key under `[gi]`.
+    pub fn key(self) -> &'static str {
+        match self {
+            Param::VoxelResolution => "voxel_resolution",
+            Param::DiffuseCones => "diffuse_cones",
+            Param::DiffuseConeAngle => "diffuse_cone_angle",
+            Param::Step => "step",
+            Param::Bounces => "bounces",
+            Param::Downsample => "downsample",
+        }
+    }
+    /// Short prefix in configuration labels.
+    fn short(self) -> &'static str {
+        match self {
+            Param::VoxelResolution => "v",
+            Param::DiffuseCones => "c",
+            Param::DiffuseConeAngle => "a",
+            Param::Step => "s",
+            Param::Bounces => "b",
+            Param::Downsample => "k",
+        }
+    }
+    fn integer(self) -> bool {
+        !matches!(self, Param::DiffuseConeAngle | Param::Step)
+    }
+    pub fn from_key(key: &str) -> Option<Param> {
+        let key = key.strip_prefix("gi.").unwrap_or(key);
+        Param::ALL.into_iter().find(|p| p.key() == key)
+    }
+}
+
+/// Values per knob; the sweep runs their Cartesian product.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Grid {
+    pub axes: Vec<(Param, Vec<f64>)>,
+}
+
+impl Grid {
+    /// The grid used when no `--grid` is given: 3 x 3 x 2 x 2 x 3 x 2 = 216 configurations.
+    pub fn default_grid() -> Grid {
+        Grid {
+            axes: vec![
+                (Param::VoxelResolution, vec![32.0, 64.0, 128.0]),
+                (Param::DiffuseCones, vec![4.0, 6.0, 9.0]),
+                (Param::DiffuseConeAngle, vec![0.0, 45.0]),
+                (Param::Step, vec![0.5, 1.0]),
+                (Param::Bounces, vec![0.0, 1.0, 2.0]),
+                (Param::Downsample, vec![1.0, 2.0]),
+            ],
+        }
+    }
+
+    /// From `--grid KEY=V1,V2,...` arguments (each knob at most once).
+    pub fn parse(args: &[String]) -> Result<Grid, SweepError> {
+        let mut axes: Vec<(Param, Vec<f64>)> = Vec::new();
+        for arg in args {
+            let bad = |message: String| SweepError::BadAxis { arg: arg.clone(), message };
+            let (key, values) = arg.split_once('=').ok_or_else(|| bad("expected KEY=V1,V2,...".into()))?;
+            let param = Param::from_key(key.trim()).ok_or_else(|| {
+                bad(format!(
+                    "unknown knob {key:?}; one of {}",
+                    Param::ALL.iter().map(|p| p.key()).collect::<Vec<_>>().join(", ")
+                ))
+            })?;
+            if axes.iter().any(|(p, _)| *p == param) {
+                return Err(bad(format!("{} given twice", param.key())));
+            }
+            let mut vals = Vec::new();
+            for v in values.split(',').map(str::trim).filter(|v| !v.is_empty()) {
+                let x: f64 = v.parse().map_err(|_| bad(format!("{v:?} is not a number")))?;
+                if !x.is_finite() || (param.integer() && x.fract() != 0.0) || x < 0.0 {
+                    return Err(bad(format!(
+                        "{v} is not a valid {} value{}",
+                        param.key(),
+                        if param.integer() { " (a whole number >= 0)" } else { " (a number >= 0)" }
+                    )));
+                }
+                if !vals.contains(&x) {
+                    vals.push(x);
+                }
+            }
+            if vals.is_empty() {
+                return Err(bad("no values".into()));
+            }
+            axes.push((param, vals));
+        }
+        Ok(Grid { axes })
+    }
+
+    /// Every combination, first axis slowest.
+    pub fn configs(&self) -> Vec<Config> {
+        let mut out = vec![Config { values: Vec::new() }];
+        for (param, vals) in &self.axes {
+            out = out
+                .into_iter()
+                .flat_map(|c| {
+                    vals.iter().map(move |&v| {
+                        let mut c = c.clone();
+                        c.values.push((*param, v));
+                        c
+                    })
+                })
+                .collect();
+        }
+        out
+    }
+}
+
+/// One configuration: a value for each swept knob (the others keep the scene's values).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Config {
+    pub values: Vec<(Param, f64)>,
+}
+
+impl Config {
+    /// e.g. `v64 c6 a0 s0.5 b1 k1`.
+    pub fn label(&self) -> String {
+        self.values.iter().map(|(p, v)| format!("{}{}", p.short(), fmt_value(*v))).collect::<Vec<_>>().join(" ")
+    }
+    /// As `--set` overrides.
+    pub fn overrides(&self) -> Vec<(String, String)> {
+        self.values.iter().map(|(p, v)| (format!("gi.{}", p.key()), fmt_value(*v))).collect()
+    }
+    pub fn get(&self, p: Param) -> Option<f64> {
+        self.values.iter().find(|(q, _)| *q == p).map(|(_, v)| *v)
+    }
+}
+
+fn fmt_value(v: f64) -> String {
+    if v.fract() == 0.0 {
+        format!("{}", v as i64)
+    } else {
+        format!("{v}")
+    }
+}
+
+/// The metrics a front is drawn for: name, axis label, the error of a row (lower is better).
+pub const METRICS: [(&str, &str); 4] = [
+    ("rmse", "RMSE (linear radiance)"),
+    ("relmse", "relMSE (linear radiance)"),
+    ("flip", "mean FLIP (display image)"),
+    ("ssim", "1 - mean SSIM (display image)"),
+];
+
+/// One finished configuration (a CSV row).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Row {
+    pub label: String,
+    pub voxel_resolution: u32,
+    pub diffuse_cones: u32,
+    pub diffuse_cone_angle: f32,
+    pub step: f32,
+    pub bounces: u32,
+    pub downsample: u32,
+    /// Median host wall clock of a frame that updates the voxels (relight, mips, bounces)
+    /// and traces: the cost when lights or objects move. The front is drawn against this.
+    pub frame_ms: f64,
+    pub frame_p95_ms: f64,
+    /// Median host wall clock of a frame that reuses the lit voxels (static scene).
+    pub static_frame_ms: f64,
+    /// GPU memory of the renderer's images and volumes, MiB.
+    pub gpu_mib: f64,
+    pub rmse: f64,
+    pub relmse: f64,
+    pub flip_mean: f64,
+    pub flip_p95: f64,
+    pub ssim_mean: f64,
+    /// Pareto-optimal (time against that metric).
+    pub front_rmse: bool,
+    pub front_relmse: bool,
+    pub front_flip: bool,
+    pub front_ssim: bool,
+}
+
+impl Row {
+    pub fn new(label: String, s: &crate::scene::GiSettings, time: [f64; 3], gpu_mib: f64, c: &Comparison) -> Row {
+        Row {
+            label,
+            voxel_resolution: s.voxel_resolution,
+            diffuse_cones: s.diffuse_cones,
+            diffuse_cone_angle: s.diffuse_cone_angle,
+            step: s.step,
+            bounces: s.bounces,
+            downsample: s.downsample,
+            frame_ms: time[0],
+            frame_p95_ms: time[1],
+            static_frame_ms: time[2],
+            gpu_mib,
+            rmse: c.rmse,
+            relmse: c.relmse,
+            flip_mean: c.flip.mean,
+            flip_p95: c.flip.p95,
+            ssim_mean: c.ssim.mean,
+            front_rmse: false,
+            front_relmse: false,
+            front_flip: false,
+            front_ssim: false,
+        }
+    }
+
+    /// The error of this row under metric `name` (one of [`METRICS`]).
+    pub fn error(&self, name: &str) -> f64 {
+        match name {
+            "rmse" => self.rmse,
+            "relmse" => self.relmse,
+            "flip" => self.flip_mean,
+            "ssim" => 1.0 - self.ssim_mean,
+            _ => f64::NAN,
+        }
+    }
+
+    fn set_front(&mut self, name: &str, on: bool) {
+        match name {
+            "rmse" => self.front_rmse = on,
+            "relmse" => self.front_relmse = on,
+            "flip" => self.front_flip = on,
+            "ssim" => self.front_ssim = on,
+            _ => {}
+        }
+    }
+
+    pub fn on_front(&self, name: &str) -> bool {
+        match name {
+            "rmse" => self.front_rmse,
+            "relmse" => self.front_relmse,
+            "flip" => self.front_flip,
+            "ssim" => self.front_ssim,
+            _ => false,
+        }
+    }
+}
+
+/// Mark every row's Pareto flags (time against each metric).
+pub fn mark_fronts(rows: &mut [Row]) {
+    for (name, _) in METRICS {
+        let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.frame_ms, r.error(name))).collect();
+        for (row, on) in rows.iter_mut().zip(crate::pareto::pareto_front(&points)) {
+            row.set_front(name, on);
+        }
+    }
+}
+
+/// What a sweep directory was made with; a resumed sweep must match it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Setup {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub settings: Vec<String>,
+    pub spp: u32,
+    pub device: String,
+    pub frames: u32,
+    pub warmup: u32,
+    pub schedule: String,
+}
+
+impl Setup {
+    /// The first field that differs, as (name, old, new).
+    pub fn difference(&self, new: &Setup) -> Option<(String, String, String)> {
+        let a = serde_json::to_value(self).ok()?;
+        let b = serde_json::to_value(new).ok()?;
+        let (a, b) = (a.as_object()?, b.as_object()?);
+        a.iter().find(|(k, v)| b.get(*k) != Some(v)).map(|(k, v)| (k.clone(), v.to_string(), b[k].to_string()))
+    }
+}
+
+/// The JSON summary of a sweep.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Results {
+    pub setup: Setup,
+    /// Host wall clock the reference took to trace.
+    pub reference_seconds: f64,
+    /// Mean over pixels of the reference's standard error relative to its value.
+    pub reference_relative_standard_error: f64,
+    /// The RMSE a perfect renderer would score against the noisy reference: the floor under
+    /// every row's RMSE.
+    pub reference_noise_rmse: f64,
+    pub rows: Vec<Row>,
+}
+
+/// Rows already in `results.csv` (none when it does not exist).
+pub fn read_rows(path: &Path) -> Result<Vec<Row>, SweepError> {
+    if !path.exists() {
+        return Ok(Vec::new());
+    }
+    let err = |message: String| SweepError::File { path: path.to_path_buf(), message };
+    let mut reader = csv::Reader::from_path(path).map_err(|e| err(e.to_string()))?;
+    let mut rows = Vec::new();
+    for r in reader.deserialize() {
+        rows.push(r.map_err(|e: csv::Error| err(format!("{e} (delete the file to start over)")))?);
+    }
+    Ok(rows)
+}
+
+/// Write `rows` as CSV to `path` atomically.
+pub fn write_rows(path: &Path, rows: &[Row]) -> Result<(), SweepError> {
+    let err = |message: String| SweepError::File { path: path.to_path_buf(), message };
+    let mut w = csv::Writer::from_writer(Vec::new());
+    for r in rows {
+        w.serialize(r).map_err(|e| err(e.to_string()))?;
+    }
+    let bytes = w.into_inner().map_err(|e| err(e.to_string()))?;
+    write_atomic(path, &bytes)
+}
+
+/// Write bytes to a temporary sibling and rename it over `path`.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SweepError> {
+    let err = |e: std::io::Error| SweepError::File { path: path.to_path_buf(), message: e.to_string() };
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, bytes).map_err(err)?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        err(e)
+    })
+}
+
+/// The frontier picture of one metric.
+pub fn plot(path: &Path, scene: &str, device: &str, rows: &[Row], metric: (&str, &str)) -> crate::Result<()> {
+    let (name, label) = metric;
+    let points: Vec<crate::pareto::PlotPoint> = rows
+        .iter()
+        .map(|r| crate::pareto::PlotPoint {
+            x: r.frame_ms,
+            y: r.error(name),
+            label: r.label.clone(),
+            front: r.on_front(name),
+        })
+        .collect();
+    let title = format!("{scene}: {label} against frame time ({device})");
+    crate::pareto::frontier_svg(
+        path,
+        &title,
+        "frame time, ms (host wall clock, voxel update frame)",
+        label,
+        &points,
+        true,
+    )?;
+    Ok(())
+}
+
+/// What `dvsgi sweep` was asked for.
+#[derive(Debug, Clone)]
+pub struct SweepOptions {
+    pub scene: PathBuf,
+    pub out: PathBuf,
+    pub grid: Grid,
+    /// Reference samples per pixel.
+    pub spp: u32,
+    /// Timed frames per configuration and scenario, after `warmup`.
+    pub frames: u32,
+    pub warmup: u32,
+    pub schedule: crate::render::Mode,
+    /// `--width/--height` as overrides.
+    pub size: Vec<(String, String)>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+struct ReferenceKey {
+    key: String,
+    seconds: f64,
+    relative_standard_error: f64,
+    /// sqrt(mean variance of the pixel means): the RMSE a perfect renderer would show
+    /// against this reference, from its noise alone.
+    noise_rmse: f64,
+}
+
+/// Run (or resume) a sweep; returns the finished results (also written to `opts.out`).
+pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Result<Results> {
+    use crate::bench::{measure_renderer, Measure};
+    use crate::metrics::{compare, LinearImage};
+    use crate::reference::{PathTracer, ReferenceOptions};
+    use crate::render::{RenderOptions, Renderer};
+
+    let dir = &opts.out;
+    std::fs::create_dir_all(dir)
+        .map_err(|e| SweepError::File { path: dir.clone(), message: format!("cannot create the directory: {e}") })?;
+    let base = common.load_scene(&opts.scene, &opts.size)?;
+    let configs = opts.grid.configs();
+    // Every configuration must load before anything runs (a bad value names its knob).
+    let mut scenes = Vec::with_capacity(configs.len());
+    for c in &configs {
+        // Voxels update only when asked: the update frames ask every time, the static ones never.
+        let mut extra = opts.size.clone();
+        extra.push(("gi.update_interval".into(), "0".into()));
+        extra.extend(c.overrides());
+        scenes.push(common.load_scene(&opts.scene, &extra)?);
+    }
+    let ctx = common.context()?;
+    let setup = Setup {
+        scene: opts.scene.display().to_string(),
+        width: base.settings.width,
+        height: base.settings.height,
+        settings: common.settings(),
+        spp: opts.spp,
+        device: ctx.info.name.clone(),
+        frames: opts.frames,
+        warmup: opts.warmup,
+        schedule: opts.schedule.to_string(),
+    };
+    let setup_path = dir.join("sweep.json");
+    if let Ok(text) = std::fs::read_to_string(&setup_path) {
+        let old: Setup = serde_json::from_str(&text)
+            .map_err(|e| SweepError::File { path: setup_path.clone(), message: format!("not a sweep setup: {e}") })?;
+        if let Some((what, old, new)) = old.difference(&setup) {
+            return Err(SweepError::SetupChanged { dir: dir.clone(), what, old, new }.into());
+        }
+    } else {
+        write_atomic(&setup_path, serde_json::to_string_pretty(&setup).expect("JSON").as_bytes())?;
+    }
+    eprintln!("sweep: {} configurations of {} on {}", configs.len(), opts.scene.display(), ctx.info.name);
+
+    // The reference, cached under a key of everything that shapes it.
+    let scene_text = std::fs::read_to_string(&opts.scene).unwrap_or_default();
+    let key = format!(
+        "dvsgi {} | {}x{} | spp {} | sets {:?} | scene {}",
+        env!("CARGO_PKG_VERSION"),
+        setup.width,
+        setup.height,
+        opts.spp,
+        common.settings(),
+        scene_text
+    );
+    let ref_path = dir.join("reference.exr");
+    let key_path = dir.join("reference.json");
+    let cached = std::fs::read_to_string(&key_path)
+        .ok()
+        .and_then(|t| serde_json::from_str::<ReferenceKey>(&t).ok())
+        .filter(|k| k.key == key && ref_path.exists());
+    let (reference, reference_key) = match cached {
+        Some(k) => {
+            eprintln!("reference: cached {} ({} spp, {:.1} s to trace)", ref_path.display(), opts.spp, k.seconds);
+            (LinearImage::read_exr(&ref_path)?, k)
+        }
+        None => {
+            let start = std::time::Instant::now();
+            let ro = ReferenceOptions { spp: opts.spp, ..Default::default() };
+            let mut pt = PathTracer::new(&ctx, &base, ro)?;
+            let bar = progress_bar(opts.spp as u64, "reference spp");
+            pt.run(|done, _| bar.set_position(done as u64))?;
+            bar.finish_and_clear();
+            let image = pt.image()?;
+            drop(pt);
+            let seconds = start.elapsed().as_secs_f64();
+            crate::output::write_exr(&ref_path, image.width, image.height, &image.mean)?;
+            let var = crate::reference::variance_path(&ref_path);
+            crate::output::write_exr(&var, image.width, image.height, &image.variance)?;
+            let noise_rmse =
+                (image.variance.iter().map(|&v| v as f64).sum::<f64>() / image.variance.len().max(1) as f64).sqrt();
+            let k = ReferenceKey { key, seconds, relative_standard_error: image.relative_standard_error(), noise_rmse };
+            write_atomic(&key_path, serde_json::to_string_pretty(&k).expect("JSON").as_bytes())?;
+            eprintln!(
+                "reference: {} spp in {seconds:.1} s, mean relative standard error {:.4}",
+                opts.spp, k.relative_standard_error
+            );
+            (LinearImage { width: image.width, height: image.height, rgb: image.mean }, k)
+        }
+    };
+    crate::cli::check_validation(&ctx)?;
+
+    let csv_path = dir.join("results.csv");
+    let mut rows = read_rows(&csv_path)?;
+    // Rows of configurations outside this grid (an earlier sweep with other --grid values
+    // in the same directory) are left out.
+    rows.retain(|r| configs.iter().any(|c| c.label() == r.label));
+    let todo: Vec<usize> =
+        (0..configs.len()).filter(|&i| !rows.iter().any(|r| r.label == configs[i].label())).collect();
+    if todo.len() < configs.len() {
+        eprintln!(
+            "resuming: {} of {} configurations already in {}",
+            configs.len() - todo.len(),
+            configs.len(),
+            csv_path.display()
+        );
+    }
+    let bar = progress_bar(todo.len() as u64, "configurations");
+    for i in todo {
+        let (config, scene) = (&configs[i], &scenes[i]);
+        bar.set_message(config.label());
+        let t = scene.settings.time;
+        let options = RenderOptions { mode: opts.schedule, frames_in_flight: 2 };
+        let mut r = Renderer::with_options(&ctx, scene.clone(), options)?;
+        let gpu_mib = r.images().iter().map(|i| i.bytes as f64).sum::<f64>() / (1024.0 * 1024.0);
+        let mut m = Measure {
+            mode: opts.schedule,
+            frames: opts.frames,
+            warmup: opts.warmup,
+            frames_in_flight: 2,
+            serial_profile: false,
+            dynamic_dt: Some(0.0),
+        };
+        let (update, _) = measure_renderer(&mut r, scene, &m)?;
+        m.dynamic_dt = None;
+        let (cached, _) = measure_renderer(&mut r, scene, &m)?;
+        r.render(t, true)?;
+        let frame = r.output();
+        drop(r);
+        crate::cli::check_validation(&ctx)?;
+        let test = LinearImage { width: frame.width, height: frame.height, rgb: crate::output::radiance_rgb(&frame) };
+        let s = &scene.settings;
+        let c = compare(&test, &reference, s.exposure, s.tonemap)?;
+        let time = [update.frame_host_ms.median, update.frame_host_ms.p95, cached.frame_host_ms.median];
+        rows.push(Row::new(config.label(), &s.gi, time, gpu_mib, &c));
+        mark_fronts(&mut rows);
+        write_rows(&csv_path, &rows)?;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    // Keep the grid's order, whatever order the rows were finished in.
+    let order = |r: &Row| configs.iter().position(|c| c.label() == r.label).unwrap_or(usize::MAX);
+    rows.sort_by_key(order);
+    mark_fronts(&mut rows);
+    write_rows(&csv_path, &rows)?;
+    let results = Results {
+        setup,
+        reference_seconds: reference_key.seconds,
+        reference_relative_standard_error: reference_key.relative_standard_error,
+        reference_noise_rmse: reference_key.noise_rmse,
+        rows,
+    };
+    write_atomic(&dir.join("results.json"), serde_json::to_string_pretty(&results).expect("JSON").as_bytes())?;
+    let scene_name = base.name.clone();
+    for metric in METRICS {
+        plot(
+            &dir.join(format!("frontier-{}.svg", metric.0)),
+            &scene_name,
+            &results.setup.device,
+            &results.rows,
+            metric,
+        )?;
+    }
+    Ok(results)
+}
+
+fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {
+    let style = indicatif::ProgressStyle::with_template(&format!(
+        "{{elapsed_precise}} [{{bar:30}}] {{pos}}/{{len}} {what}, eta {{eta}} {{msg}}"
+    ))
+    .expect("valid template")
+    .progress_chars("=> ");
+    indicatif::ProgressBar::new(len).with_style(style)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_parses_and_multiplies() {
+        let g = Grid::parse(&["voxel_resolution=32,64".into(), "gi.step=0.5, 1".into(), "bounces=1".into()]).unwrap();
+        let c = g.configs();
+        assert_eq!(c.len(), 4);
+        assert_eq!(c[0].label(), "v32 s0.5 b1");
+        assert_eq!(c[3].label(), "v64 s1 b1");
+        assert_eq!(
+            c[1].overrides(),
+            vec![
+                ("gi.voxel_resolution".to_string(), "32".to_string()),
+                ("gi.step".into(), "1".into()),
+                ("gi.bounces".into(), "1".into())
+            ]
+        );
+        assert_eq!(Grid::default_grid().configs().len(), 216);
+        for bad in ["voxels=32", "step", "bounces=1.5", "step=-1", "step=", "step=x", "step=nan"] {
+            assert!(Grid::parse(&[bad.into()]).is_err(), "{bad}");
+        }
+        assert!(Grid::parse(&["step=1".into(), "step=2".into()]).is_err());
+    }
+
+    fn row(label: &str, ms: f64, rmse: f64, ssim: f64) -> Row {
+        let c = Comparison {
+            rmse,
+            relmse: rmse * 2.0,
+            flip: crate::metrics::Summary::of(&[rmse as f32]),
+            ssim: crate::metrics::Summary::of(&[ssim as f32]),
+            pixels: 1,
+        };
+        Row::new(label.into(), &crate::scene::GiSettings::default(), [ms, ms, ms], 1.0, &c)
+    }
+
+    #[test]
+    fn fronts_are_marked_per_metric() {
+        // Hand-made: a (fast, bad), b (slow, good), c dominated by a, d best SSIM only.
+        let mut rows = vec![
+            row("a", 10.0, 0.5, 0.90),
+            row("b", 30.0, 0.1, 0.95),
+            row("c", 20.0, 0.6, 0.80),
+            row("d", 40.0, 0.2, 0.99),
+        ];
+        mark_fronts(&mut rows);
+        let front = |m: &str| rows.iter().filter(|r| r.on_front(m)).map(|r| r.label.as_str()).collect::<Vec<_>>();
+        assert_eq!(front("rmse"), ["a", "b"]);
+        assert_eq!(front("relmse"), ["a", "b"]);
+        assert_eq!(front("ssim"), ["a", "b", "d"]);
+    }
+
+    #[test]
+    fn rows_round_trip_through_csv_and_setups_compare() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("results.csv");
+        assert!(read_rows(&path).unwrap().is_empty());
+        let mut rows = vec![row("a", 10.0, 0.5, 0.9), row("b", 30.0, 0.1, 0.95)];
+        mark_fronts(&mut rows);
+        write_rows(&path, &rows).unwrap();
+        assert_eq!(read_rows(&path).unwrap(), rows);
+        std::fs::write(&path, "label,nonsense\nx,1\n").unwrap();
+        assert!(read_rows(&path).unwrap_err().to_string().contains("results.csv"));
+        let a = Setup {
+            scene: "s".into(),
+            width: 1,
+            height: 1,
+            settings: vec![],
+            spp: 4,
+            device: "d".into(),
+            frames: 1,
+            warmup: 0,
+            schedule: "sync".into(),
+        };
+        let b = Setup { spp: 8, ..a.clone() };
+        assert_eq!(a.difference(&a), None);
+        assert_eq!(a.difference(&b), Some(("spp".into(), "4".into(), "8".into())));
+    }
+}

@@ -1,0 +1,224 @@
+//! `dvsgi reference`, `compare` and `sweep` end to end on lavapipe with validation on:
+//! a miniature sweep (three configurations, a tiny image) producing a valid CSV, JSON and
+//! frontier pictures, resuming without redoing rows, and refusing a changed setup; the
+//! compare command's figures against hand-computed values; bad input failing cleanly.
+
+mod common;
+
+use common::repo;
+use dvsgi::sweep::{Results, Row};
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn dvsgi(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_dvsgi"))
+        .args(args)
+        .current_dir(repo())
+        .env("DVSGI_VALIDATION", "1")
+        .output()
+        .expect("run dvsgi")
+}
+
+fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+fn ok(o: &Output) -> String {
+    let t = text(o);
+    assert!(o.status.success(), "failed:\n{t}");
+    t
+}
+
+fn fails(o: &Output, code: i32) -> String {
+    let t = text(o);
+    assert_eq!(o.status.code(), Some(code), "exit code:\n{t}");
+    assert!(!t.contains("panicked"), "panic:\n{t}");
+    t
+}
+
+fn sweep(out: &Path, grid: &[&str], spp: &str) -> Output {
+    let mut args = vec![
+        "sweep",
+        "scenes/cornell-box.toml",
+        "--out",
+        out.to_str().unwrap(),
+        "--width",
+        "24",
+        "--height",
+        "24",
+        "--spp",
+        spp,
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--grid",
+        "voxel_resolution=16",
+    ];
+    for g in grid {
+        args.extend(["--grid", g]);
+    }
+    dvsgi(&args)
+}
+
+#[test]
+fn miniature_sweep_writes_rows_fronts_and_pictures_and_resumes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sweep");
+    ok(&sweep(&out, &["bounces=0,1"], "16"));
+    let rows: Vec<Row> =
+        csv::Reader::from_path(out.join("results.csv")).unwrap().deserialize().map(|r| r.unwrap()).collect();
+    assert_eq!(rows.iter().map(|r| r.label.as_str()).collect::<Vec<_>>(), ["v16 b0", "v16 b1"]);
+    for r in &rows {
+        assert_eq!(r.voxel_resolution, 16);
+        assert!(r.frame_ms > 0.0 && r.static_frame_ms > 0.0 && r.gpu_mib > 0.0, "{r:?}");
+        assert!(r.rmse.is_finite() && r.rmse > 0.0 && r.flip_mean > 0.0 && r.ssim_mean < 1.0, "{r:?}");
+    }
+    // Each metric has a front, and the fastest row is always on it.
+    let fastest = rows.iter().min_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms)).unwrap();
+    for (m, _) in dvsgi::sweep::METRICS {
+        assert!(fastest.on_front(m), "{m}: the fastest configuration is never dominated");
+        let svg = std::fs::read_to_string(out.join(format!("frontier-{m}.svg"))).unwrap();
+        assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"), "{m}");
+        assert!(svg.contains(&fastest.label), "{m}: front label missing");
+    }
+    let results: Results = serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    assert_eq!(results.rows.len(), rows.len());
+    for (j, c) in results.rows.iter().zip(&rows) {
+        assert_eq!(j.label, c.label);
+        assert!((j.frame_ms - c.frame_ms).abs() < 1e-6 && (j.rmse - c.rmse).abs() < 1e-9);
+    }
+    assert_eq!(results.setup.spp, 16);
+    assert!(results.reference_noise_rmse > 0.0);
+    for f in ["reference.exr", "reference.var.exr", "reference.json", "sweep.json"] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+
+    // A wider grid in the same directory reuses the reference and the finished rows.
+    let t = ok(&sweep(&out, &["bounces=0,1,2"], "16"));
+    assert!(t.contains("reference: cached"), "{t}");
+    assert!(t.contains("resuming: 2 of 3"), "{t}");
+    let again: Vec<Row> =
+        csv::Reader::from_path(out.join("results.csv")).unwrap().deserialize().map(|r| r.unwrap()).collect();
+    assert_eq!(again.len(), 3);
+    assert!((again[0].frame_ms - rows[0].frame_ms).abs() < 1e-6, "a finished row was measured again");
+
+    // Another setup in the same directory is refused, naming what changed.
+    let t = fails(&sweep(&out, &["bounces=0"], "32"), 1);
+    assert!(t.contains("different setup") && t.contains("spp"), "{t}");
+    // A bad grid fails before anything runs.
+    let t = fails(&sweep(&dir.path().join("other"), &["bounces=1.5"], "16"), 1);
+    assert!(t.contains("bounces") && !dir.path().join("other/results.csv").exists(), "{t}");
+    let t = fails(&sweep(&dir.path().join("other"), &["downsample=9"], "16"), 1);
+    assert!(t.contains("downsample"), "{t}");
+}
+
+fn write_exr(path: &Path, w: u32, h: u32, rgb: &[f32]) {
+    dvsgi::output::write_exr(path, w, h, rgb).unwrap();
+}
+
+#[test]
+fn compare_reports_hand_computed_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.exr"), dir.path().join("b.exr"));
+    // Reference all 1.0; the test image has one channel of one of four pixels at 2.0:
+    // MSE = 1/12, RMSE = 0.288675; relMSE = (1 / 1.01) / 12 = 0.082508.
+    write_exr(&b, 2, 2, &[1.0; 12]);
+    let mut t = [1.0f32; 12];
+    t[4] = 2.0;
+    write_exr(&a, 2, 2, &t);
+    let diff = dir.path().join("diff.png");
+    let json = dir.path().join("c.json");
+    let o = ok(&dvsgi(&[
+        "compare",
+        a.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "--diff",
+        diff.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]));
+    assert!(o.contains("RMSE   0.288675"), "{o}");
+    assert!(o.contains("relMSE 0.082508"), "{o}");
+    assert!(image::open(&diff).unwrap().width() == 2);
+    let c: dvsgi::metrics::Comparison = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!((c.rmse - (1.0f64 / 12.0).sqrt()).abs() < 1e-9);
+    assert!(c.flip.mean > 0.0 && c.ssim.mean < 1.0);
+
+    // Identical images: zero error.
+    let o = ok(&dvsgi(&["compare", b.to_str().unwrap(), b.to_str().unwrap()]));
+    assert!(o.contains("RMSE   0.000000") && o.contains("FLIP   mean 0.0000"), "{o}");
+
+    // Bad input: a size mismatch names both files, a missing file is named, a PNG is not
+    // radiance, an unknown tone map is a usage error; no error map is left behind.
+    let small = dir.path().join("small.exr");
+    write_exr(&small, 1, 1, &[1.0; 3]);
+    let d2 = dir.path().join("d2.png");
+    let t =
+        fails(&dvsgi(&["compare", small.to_str().unwrap(), b.to_str().unwrap(), "--diff", d2.to_str().unwrap()]), 1);
+    assert!(t.contains("small.exr") && t.contains("b.exr") && t.contains("1x1") && t.contains("2x2"), "{t}");
+    assert!(!d2.exists());
+    let t = fails(&dvsgi(&["compare", dir.path().join("nope.exr").to_str().unwrap(), b.to_str().unwrap()]), 1);
+    assert!(t.contains("nope.exr"), "{t}");
+    let t = fails(&dvsgi(&["compare", diff.to_str().unwrap(), b.to_str().unwrap()]), 1);
+    assert!(t.contains("diff.png"), "{t}");
+    let t = fails(&dvsgi(&["compare", a.to_str().unwrap(), b.to_str().unwrap(), "--tonemap", "filmic"]), 1);
+    assert!(t.contains("--tonemap"), "{t}");
+}
+
+#[test]
+fn reference_writes_radiance_variance_and_display_and_refuses_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("ref.exr");
+    let png = dir.path().join("ref.png");
+    let o = ok(&dvsgi(&[
+        "reference",
+        "scenes/cornell-box.toml",
+        "--spp",
+        "4",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--out",
+        exr.to_str().unwrap(),
+        "--out",
+        png.to_str().unwrap(),
+    ]));
+    assert!(o.contains("30 triangles"), "{o}");
+    for p in [&exr, &dir.path().join("ref.var.exr"), &png] {
+        let img = image::open(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        assert_eq!((img.width(), img.height()), (16, 12));
+    }
+    let bad = dir.path().join("ref.txt");
+    let t = fails(&dvsgi(&["reference", "scenes/cornell-box.toml", "--out", bad.to_str().unwrap()]), 1);
+    assert!(t.contains("ref.txt"), "{t}");
+    let missing = dir.path().join("missing.toml");
+    let t = fails(&dvsgi(&["reference", missing.to_str().unwrap(), "--out", exr.to_str().unwrap()]), 1);
+    assert!(t.contains("missing.toml"), "{t}");
+    fails(&dvsgi(&["reference", "scenes/cornell-box.toml", "--spp", "0", "--out", exr.to_str().unwrap()]), 2);
+    assert!(!bad.exists());
+}
+
+#[test]
+fn presets_render_and_set_can_override_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.png");
+    for p in ["low", "medium", "high", "ultra"] {
+        ok(&dvsgi(&[
+            "--preset",
+            p,
+            "render",
+            "scenes/cornell-box.toml",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--set",
+            "gi.voxel_resolution=16",
+            "--out",
+            out.to_str().unwrap(),
+        ]));
+    }
+    fails(&dvsgi(&["--preset", "extreme", "info"]), 2);
+}
