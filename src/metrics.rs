@@ -312,6 +312,10 @@ pub struct Comparison {
     pub ssim: Summary,
     /// Number of pixels compared.
     pub pixels: u64,
+    /// Mean radiance of the test image (over pixels and channels): with `reference_mean`, how
+    /// much energy the test image gains or loses overall.
+    pub test_mean: f64,
+    pub reference_mean: f64,
 }
 
 fn check_pair(
@@ -363,7 +367,10 @@ pub fn compare_files(
 fn compare_checked(test: &LinearImage, reference: &LinearImage, exposure: f32, tonemap_mode: ToneMap) -> Comparison {
     let mut se = 0.0f64;
     let mut rel = 0.0f64;
+    let (mut sum_t, mut sum_r) = (0.0f64, 0.0f64);
     for (&t, &r) in test.rgb.iter().zip(&reference.rgb) {
+        sum_t += t as f64;
+        sum_r += r as f64;
         let d = t as f64 - r as f64;
         se += d * d;
         rel += d * d / ((r as f64) * (r as f64) + RELMSE_EPSILON);
@@ -379,6 +386,8 @@ fn compare_checked(test: &LinearImage, reference: &LinearImage, exposure: f32, t
         flip: Summary::of(&flip.to_vec()),
         ssim: Summary::of(&ssim),
         pixels: test.pixels(),
+        test_mean: sum_t / n,
+        reference_mean: sum_r / n,
     }
 }
 

@@ -82,23 +82,38 @@ pub fn frontier_svg(
     x_label: &str,
     y_label: &str,
     points: &[PlotPoint],
+    log_x: bool,
     log_y: bool,
 ) -> Result<(), PlotError> {
     let finite: Vec<&PlotPoint> = points.iter().filter(|p| p.x.is_finite() && p.y.is_finite()).collect();
     let min_positive = finite.iter().map(|p| p.y).filter(|&y| y > 0.0).fold(f64::INFINITY, f64::min);
     let floor = if min_positive.is_finite() { min_positive / 2.0 } else { 1.0 };
+    let min_positive_x = finite.iter().map(|p| p.x).filter(|&x| x > 0.0).fold(f64::INFINITY, f64::min);
+    let floor_x = if min_positive_x.is_finite() { min_positive_x / 2.0 } else { 1.0 };
     let ys = |p: &PlotPoint| if log_y { p.y.max(floor) } else { p.y };
-    let placed: Vec<(f64, f64, &PlotPoint)> = finite.iter().map(|p| (p.x, ys(p), *p)).collect();
+    let xs = |p: &PlotPoint| if log_x { p.x.max(floor_x) } else { p.x };
+    let placed: Vec<(f64, f64, &PlotPoint)> = finite.iter().map(|p| (xs(p), ys(p), *p)).collect();
+    // A log axis over less than a decade gets no ticks from plotters: keep such axes linear.
+    let spans_decade = |v: &mut dyn Iterator<Item = f64>| {
+        let (lo, hi) = v.fold((f64::INFINITY, 0.0f64), |(lo, hi), x| (lo.min(x), hi.max(x)));
+        hi > 10.0 * lo
+    };
+    let log_x = log_x && spans_decade(&mut placed.iter().map(|p| p.0));
+    let log_y = log_y && spans_decade(&mut placed.iter().map(|p| p.1));
 
-    let x_range = linear_range(placed.iter().map(|p| p.0));
-    let spec = Spec { title, x_label, y_label, points: &placed };
+    let spec = Spec { title, x_label, y_label, points: &placed, log_x };
     let mut svg = String::new();
     let drawn = {
         let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
-        let result = if log_y {
-            draw_chart(&root, &spec, x_range, log_range(placed.iter().map(|p| p.1)).log_scale())
-        } else {
-            draw_chart(&root, &spec, x_range, linear_range(placed.iter().map(|p| p.1)))
+        let xl = || linear_range(placed.iter().map(|p| p.0));
+        let xg = || log_range(placed.iter().map(|p| p.0));
+        let yl = || linear_range(placed.iter().map(|p| p.1));
+        let yg = || log_range(placed.iter().map(|p| p.1));
+        let result = match (log_x, log_y) {
+            (false, false) => draw_chart(&root, &spec, xl(), yl()),
+            (false, true) => draw_chart(&root, &spec, xl(), yg().log_scale()),
+            (true, false) => draw_chart(&root, &spec, xg().log_scale(), yl()),
+            (true, true) => draw_chart(&root, &spec, xg().log_scale(), yg().log_scale()),
         };
         result.and_then(|()| root.present())
     };
@@ -111,15 +126,18 @@ struct Spec<'a> {
     x_label: &'a str,
     y_label: &'a str,
     points: &'a [(f64, f64, &'a PlotPoint)],
+    log_x: bool,
 }
 
-fn draw_chart<Y>(
+fn draw_chart<X, Y>(
     root: &DrawingArea<SVGBackend<'_>, Shift>,
     spec: &Spec<'_>,
-    x_range: Range<f64>,
+    x_range: X,
     y_range: Y,
 ) -> Result<(), DrawingAreaErrorKind<std::io::Error>>
 where
+    X: AsRangedCoord<Value = f64>,
+    X::CoordDescType: ValueFormatter<f64>,
     Y: AsRangedCoord<Value = f64>,
     Y::CoordDescType: ValueFormatter<f64>,
 {
@@ -129,7 +147,7 @@ where
         .margin(16)
         .x_label_area_size(48)
         .y_label_area_size(72)
-        .build_cartesian_2d(x_range.clone(), y_range)?;
+        .build_cartesian_2d(x_range, y_range)?;
     chart
         .configure_mesh()
         .x_desc(spec.x_label)
@@ -159,7 +177,10 @@ where
     chart.draw_series(LineSeries::new(steps, FRONT_COLOR.stroke_width(2)))?;
     // Labels sit above their point, right of it in the left half of the plot and left of it
     // in the right half, so they stay inside the picture.
-    let middle = (x_range.start + x_range.end) / 2.0;
+    let xs: Vec<f64> = spec.points.iter().map(|p| p.0).collect();
+    let (lo, hi) =
+        (xs.iter().copied().fold(f64::INFINITY, f64::min), xs.iter().copied().fold(f64::NEG_INFINITY, f64::max));
+    let middle = if spec.log_x { (lo * hi).sqrt() } else { (lo + hi) / 2.0 };
     chart
         .draw_series(front.iter().map(|p| {
             let (dx, h) = if p.0 <= middle { (7, HPos::Left) } else { (-7, HPos::Right) };
@@ -303,7 +324,8 @@ mod tests {
         assert_eq!(points.iter().filter(|p| p.front).count(), 4, "{points:?}");
         for log_y in [false, true] {
             let path = dir.path().join(format!("front-{log_y}.svg"));
-            frontier_svg(&path, "Cornell box: time vs FLIP", "GPU time (ms)", "mean FLIP", &points, log_y).unwrap();
+            frontier_svg(&path, "Cornell box: time vs FLIP", "GPU time (ms)", "mean FLIP", &points, false, log_y)
+                .unwrap();
             let text = std::fs::read_to_string(&path).unwrap();
             check_svg(&text, &points, "Cornell box: time vs FLIP");
             assert!(text.contains("GPU time (ms)") && text.contains("mean FLIP"));
@@ -315,12 +337,12 @@ mod tests {
     fn svg_degenerate_inputs() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("empty.svg");
-        frontier_svg(&path, "nothing", "x", "y", &[], true).unwrap();
+        frontier_svg(&path, "nothing", "x", "y", &[], true, true).unwrap();
         check_svg(&std::fs::read_to_string(&path).unwrap(), &[], "nothing");
         let one = [PlotPoint { x: 3.0, y: 0.0, label: "only".into(), front: true }];
         let nan = PlotPoint { x: f64::NAN, y: 1.0, label: "nan".into(), front: false };
         for log_y in [false, true] {
-            frontier_svg(&path, "one", "x", "y", &[one[0].clone(), nan.clone()], log_y).unwrap();
+            frontier_svg(&path, "one", "x", "y", &[one[0].clone(), nan.clone()], log_y, log_y).unwrap();
             check_svg(&std::fs::read_to_string(&path).unwrap(), &one, "one");
         }
     }
@@ -329,7 +351,7 @@ mod tests {
     fn svg_error_names_path_and_leaves_nothing() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("no-such-dir").join("plot.svg");
-        let e = frontier_svg(&path, "t", "x", "y", &sample_points(), false).unwrap_err();
+        let e = frontier_svg(&path, "t", "x", "y", &sample_points(), false, false).unwrap_err();
         assert!(e.to_string().contains("no-such-dir"), "{e}");
         assert!(!path.exists() && !path.with_extension("svg.tmp").exists());
     }

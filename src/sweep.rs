@@ -38,16 +38,19 @@ pub enum Param {
     Step,
     Bounces,
     Downsample,
+    /// `gi.ao` (0 = off, 1 = on): whether AO multiplies the traced indirect light.
+    Ao,
 }
 
 impl Param {
-    pub const ALL: [Param; 6] = [
+    pub const ALL: [Param; 7] = [
         Param::VoxelResolution,
         Param::DiffuseCones,
         Param::DiffuseConeAngle,
         Param::Step,
         Param::Bounces,
         Param::Downsample,
+        Param::Ao,
     ];
     /// The key under `[gi]`.
     pub fn key(self) -> &'static str {
@@ -58,6 +61,7 @@ impl Param {
             Param::Step => "step",
             Param::Bounces => "bounces",
             Param::Downsample => "downsample",
+            Param::Ao => "ao",
         }
     }
     /// Short prefix in configuration labels.
@@ -69,6 +73,7 @@ impl Param {
             Param::Step => "s",
             Param::Bounces => "b",
             Param::Downsample => "k",
+            Param::Ao => "o",
         }
     }
     fn integer(self) -> bool {
@@ -87,7 +92,8 @@ pub struct Grid {
 }
 
 impl Grid {
-    /// The grid used when no `--grid` is given: 3 x 3 x 2 x 2 x 3 x 2 = 216 configurations.
+    /// The grid used when no `--grid` is given: 3 x 3 x 2 x 2 x 3 x 2 = 216 configurations
+    /// (AO stays as the scene sets it).
     pub fn default_grid() -> Grid {
         Grid {
             axes: vec![
@@ -119,7 +125,8 @@ impl Grid {
             let mut vals = Vec::new();
             for v in values.split(',').map(str::trim).filter(|v| !v.is_empty()) {
                 let x: f64 = v.parse().map_err(|_| bad(format!("{v:?} is not a number")))?;
-                if !x.is_finite() || (param.integer() && x.fract() != 0.0) || x < 0.0 {
+                if !x.is_finite() || (param.integer() && x.fract() != 0.0) || x < 0.0 || (param == Param::Ao && x > 1.0)
+                {
                     return Err(bad(format!(
                         "{v} is not a valid {} value{}",
                         param.key(),
@@ -170,7 +177,13 @@ impl Config {
     }
     /// As `--set` overrides.
     pub fn overrides(&self) -> Vec<(String, String)> {
-        self.values.iter().map(|(p, v)| (format!("gi.{}", p.key()), fmt_value(*v))).collect()
+        self.values
+            .iter()
+            .map(|(p, v)| {
+                let value = if *p == Param::Ao { (*v != 0.0).to_string() } else { fmt_value(*v) };
+                (format!("gi.{}", p.key()), value)
+            })
+            .collect()
     }
     pub fn get(&self, p: Param) -> Option<f64> {
         self.values.iter().find(|(q, _)| *q == p).map(|(_, v)| *v)
@@ -203,6 +216,7 @@ pub struct Row {
     pub step: f32,
     pub bounces: u32,
     pub downsample: u32,
+    pub ao: bool,
     /// Median host wall clock of a frame that updates the voxels (relight, mips, bounces)
     /// and traces: the cost when lights or objects move. The front is drawn against this.
     pub frame_ms: f64,
@@ -216,6 +230,8 @@ pub struct Row {
     pub flip_mean: f64,
     pub flip_p95: f64,
     pub ssim_mean: f64,
+    /// Mean radiance of the image over the reference's: below 1, energy is missing.
+    pub energy_ratio: f64,
     /// Pareto-optimal (time against that metric).
     pub front_rmse: bool,
     pub front_relmse: bool,
@@ -233,6 +249,7 @@ impl Row {
             step: s.step,
             bounces: s.bounces,
             downsample: s.downsample,
+            ao: s.ao,
             frame_ms: time[0],
             frame_p95_ms: time[1],
             static_frame_ms: time[2],
@@ -242,6 +259,7 @@ impl Row {
             flip_mean: c.flip.mean,
             flip_p95: c.flip.p95,
             ssim_mean: c.ssim.mean,
+            energy_ratio: c.test_mean / c.reference_mean,
             front_rmse: false,
             front_relmse: false,
             front_flip: false,
@@ -279,6 +297,73 @@ impl Row {
             _ => false,
         }
     }
+}
+
+/// What raising one knob one step does, averaged over every pair of rows that differ only
+/// in that knob.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct KnobEffect {
+    pub knob: Param,
+    pub from: f64,
+    pub to: f64,
+    /// Pairs of rows averaged.
+    pub pairs: usize,
+    /// Mean change of the frame time, ms.
+    pub delta_ms: f64,
+    /// Mean change of mean FLIP (negative: more accurate).
+    pub delta_flip: f64,
+    /// Mean change of RMSE.
+    pub delta_rmse: f64,
+}
+
+impl Row {
+    fn knob(&self, p: Param) -> f64 {
+        match p {
+            Param::VoxelResolution => self.voxel_resolution as f64,
+            Param::DiffuseCones => self.diffuse_cones as f64,
+            Param::DiffuseConeAngle => self.diffuse_cone_angle as f64,
+            Param::Step => self.step as f64,
+            Param::Bounces => self.bounces as f64,
+            Param::Downsample => self.downsample as f64,
+            Param::Ao => self.ao as u32 as f64,
+        }
+    }
+}
+
+/// The effect of each step of each swept knob (see [`KnobEffect`]).
+pub fn knob_effects(grid: &Grid, rows: &[Row]) -> Vec<KnobEffect> {
+    let mut out = Vec::new();
+    for (param, values) in &grid.axes {
+        let others: Vec<Param> = Param::ALL.into_iter().filter(|p| p != param).collect();
+        for w in values.windows(2) {
+            let (from, to) = (w[0], w[1]);
+            let (mut n, mut dms, mut dflip, mut drmse) = (0usize, 0.0, 0.0, 0.0);
+            for a in rows.iter().filter(|r| (r.knob(*param) - from).abs() < 1e-9) {
+                let twin = rows.iter().find(|b| {
+                    (b.knob(*param) - to).abs() < 1e-9 && others.iter().all(|p| (b.knob(*p) - a.knob(*p)).abs() < 1e-9)
+                });
+                if let Some(b) = twin {
+                    n += 1;
+                    dms += b.frame_ms - a.frame_ms;
+                    dflip += b.flip_mean - a.flip_mean;
+                    drmse += b.rmse - a.rmse;
+                }
+            }
+            if n > 0 {
+                let k = n as f64;
+                out.push(KnobEffect {
+                    knob: *param,
+                    from,
+                    to,
+                    pairs: n,
+                    delta_ms: dms / k,
+                    delta_flip: dflip / k,
+                    delta_rmse: drmse / k,
+                });
+            }
+        }
+    }
+    out
 }
 
 /// Mark every row's Pareto flags (time against each metric).
@@ -327,6 +412,8 @@ pub struct Results {
     /// every row's RMSE.
     pub reference_noise_rmse: f64,
     pub rows: Vec<Row>,
+    /// What each step of each knob costs and buys, on average.
+    pub knob_effects: Vec<KnobEffect>,
 }
 
 /// Rows already in `results.csv` (none when it does not exist).
@@ -384,6 +471,7 @@ pub fn plot(path: &Path, scene: &str, device: &str, rows: &[Row], metric: (&str,
         "frame time, ms (host wall clock, voxel update frame)",
         label,
         &points,
+        true,
         true,
     )?;
     Ok(())
@@ -566,6 +654,7 @@ pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Resul
         reference_seconds: reference_key.seconds,
         reference_relative_standard_error: reference_key.relative_standard_error,
         reference_noise_rmse: reference_key.noise_rmse,
+        knob_effects: knob_effects(&opts.grid, &rows),
         rows,
     };
     write_atomic(&dir.join("results.json"), serde_json::to_string_pretty(&results).expect("JSON").as_bytes())?;
@@ -611,7 +700,10 @@ mod tests {
             ]
         );
         assert_eq!(Grid::default_grid().configs().len(), 216);
-        for bad in ["voxels=32", "step", "bounces=1.5", "step=-1", "step=", "step=x", "step=nan"] {
+        let ao = Grid::parse(&["ao=0,1".into()]).unwrap().configs();
+        assert_eq!(ao[1].overrides(), vec![("gi.ao".to_string(), "true".to_string())]);
+        assert_eq!(ao[0].label(), "o0");
+        for bad in ["voxels=32", "step", "bounces=1.5", "step=-1", "step=", "step=x", "step=nan", "ao=2"] {
             assert!(Grid::parse(&[bad.into()]).is_err(), "{bad}");
         }
         assert!(Grid::parse(&["step=1".into(), "step=2".into()]).is_err());
@@ -624,6 +716,8 @@ mod tests {
             flip: crate::metrics::Summary::of(&[rmse as f32]),
             ssim: crate::metrics::Summary::of(&[ssim as f32]),
             pixels: 1,
+            test_mean: 1.0,
+            reference_mean: 1.0,
         };
         Row::new(label.into(), &crate::scene::GiSettings::default(), [ms, ms, ms], 1.0, &c)
     }
@@ -642,6 +736,20 @@ mod tests {
         assert_eq!(front("rmse"), ["a", "b"]);
         assert_eq!(front("relmse"), ["a", "b"]);
         assert_eq!(front("ssim"), ["a", "b", "d"]);
+    }
+
+    #[test]
+    fn knob_effects_average_matching_pairs() {
+        let mut rows = vec![row("a", 10.0, 0.5, 0.9), row("b", 30.0, 0.3, 0.9), row("c", 50.0, 0.2, 0.9)];
+        rows[1].bounces = 2;
+        rows[2].voxel_resolution = 64;
+        let grid = Grid { axes: vec![(Param::Bounces, vec![1.0, 2.0]), (Param::VoxelResolution, vec![128.0, 64.0])] };
+        let e = knob_effects(&grid, &rows);
+        assert_eq!(e.len(), 2);
+        assert_eq!((e[0].knob, e[0].pairs), (Param::Bounces, 1));
+        assert!((e[0].delta_ms - 20.0).abs() < 1e-9 && (e[0].delta_rmse + 0.2).abs() < 1e-9);
+        assert_eq!((e[1].knob, e[1].from, e[1].to), (Param::VoxelResolution, 128.0, 64.0));
+        assert!((e[1].delta_ms - 40.0).abs() < 1e-9);
     }
 
     #[test]

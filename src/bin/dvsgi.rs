@@ -88,7 +88,8 @@ enum Command {
         #[arg(long, short)]
         out: PathBuf,
         /// A knob and its values, e.g. --grid voxel_resolution=32,64,128 (repeatable; knobs:
-        /// voxel_resolution, diffuse_cones, diffuse_cone_angle, step, bounces, downsample).
+        /// voxel_resolution, diffuse_cones, diffuse_cone_angle, step, bounces, downsample, ao
+        /// (0 or 1)).
         /// Without --grid: the default grid of 216 configurations (ACCURACY.md).
         #[arg(long)]
         grid: Vec<String>,
@@ -270,6 +271,12 @@ fn compare(
             s.mean, s.p50, s.p90, s.p95, s.p99, s.max
         )
     };
+    println!(
+        "  mean radiance {:.6} against {:.6} (ratio {:.4})",
+        c.test_mean,
+        c.reference_mean,
+        c.test_mean / c.reference_mean
+    );
     row("FLIP", &c.flip);
     row("SSIM", &c.ssim);
     println!("  (FLIP: 0 = identical, lower is better; SSIM: 1 = identical, higher is better)");
@@ -288,6 +295,19 @@ fn compare(
 }
 
 fn print_sweep(results: &dvsgi::sweep::Results) {
+    println!("each knob, one step up, averaged over rows that differ only in it:");
+    println!("  {:<20} {:>14} {:>6} {:>10} {:>11} {:>11}", "knob", "step", "pairs", "d ms", "d FLIP", "d RMSE");
+    for e in &results.knob_effects {
+        println!(
+            "  {:<20} {:>14} {:>6} {:>+10.1} {:>+11.5} {:>+11.5}",
+            e.knob.key(),
+            format!("{} -> {}", e.from, e.to),
+            e.pairs,
+            e.delta_ms,
+            e.delta_flip,
+            e.delta_rmse
+        );
+    }
     println!("{} configurations; Pareto-optimal for mean FLIP against frame time:", results.rows.len());
     println!(
         "  {:<28} {:>10} {:>10} {:>9} {:>9} {:>7}",
