@@ -6,7 +6,8 @@
 //! Output directory: `results.csv` (one row per configuration, appended and flushed as each
 //! finishes, so an interrupted sweep resumes where it stopped), `results.json` (the setup, the
 //! rows and the fronts), `frontier-<metric>.svg` (time against error, front highlighted),
-//! `reference.exr` / `reference.var.exr` / `reference.json` (the cached ground truth) and
+//! `reference.exr` / `reference.var.exr` / `reference.json` (the cached ground truth, with
+//! `reference.png` its display image) and
 //! `sweep.json` (the setup a resumed sweep must match).
 
 use crate::metrics::Comparison;
@@ -595,6 +596,12 @@ pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Resul
         }
     };
     crate::cli::check_validation(&ctx)?;
+    let png_path = dir.join("reference.png");
+    if !png_path.exists() {
+        let rgb = crate::metrics::display_srgb8(&reference, base.settings.exposure, base.settings.tonemap);
+        let png = image::RgbImage::from_raw(reference.width, reference.height, rgb).expect("display size");
+        crate::output::write_png(&png_path, &png)?;
+    }
 
     let csv_path = dir.join("results.csv");
     let mut rows = read_rows(&csv_path)?;

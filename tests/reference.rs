@@ -142,3 +142,17 @@ fn direct_only_matches_the_rasterizer() {
     // Only shadow edges (PCF against exact visibility) may differ: measured 33 of 12288.
     assert!(far * 100 < n * 3, "{far} of {} values differ beyond noise", n * 3);
 }
+
+#[test]
+fn empty_scene_traces_to_black() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("empty.toml");
+    std::fs::write(
+        &path,
+        "[camera]\nposition = [0, 0, 3]\ntarget = [0, 0, 0]\n[render]\nwidth = 8\nheight = 8\n\
+         [[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = [1, 1, 1]\n",
+    )
+    .unwrap();
+    let image = trace(&load(&path, &[]), 2, 1, None, true);
+    assert!(image.mean.iter().chain(&image.variance).all(|&v| v == 0.0));
+}
