@@ -4,7 +4,8 @@
 // two-sided Lambertian emission, and directional/point/spot lights (lights.glsl) sampled by
 // next-event estimation. Emissive surfaces are found by the paths themselves. Paths end by
 // Russian roulette; `size.w` caps the number of indirect bounces (0 = direct light only).
-// Each invocation traces `pc.samples` paths through one pixel (through its centre, as the
+// Each invocation traces `pc.samples` paths (the host sends 1 and dispatches again: see
+// reference::TracePass) through one pixel (through its centre, as the
 // rasterizer samples, or spread over it with `info.y`) and
 // adds their radiance and squared radiance to two accumulators, so the host can form the
 // mean and the variance of the mean.

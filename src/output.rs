@@ -100,9 +100,23 @@ pub fn write_png(path: &Path, image: &image::RgbImage) -> Result<(), OutputError
     write_atomic(path, Format::Png, &image::DynamicImage::ImageRgb8(image.clone()))
 }
 
-fn write_atomic(path: &Path, format: Format, image: &image::DynamicImage) -> Result<(), OutputError> {
+/// Write bytes (a report, a picture) to `path` atomically: a temporary sibling, then a rename.
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    check_target_dir(path)?;
+    let tmp = tmp_name(path);
+    std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path)).map_err(|source| {
+        let _ = std::fs::remove_file(&tmp);
+        OutputError::Io { path: path.to_path_buf(), source }
+    })
+}
+
+fn tmp_name(path: &Path) -> PathBuf {
     let file_name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{file_name}.{}.tmp", std::process::id()));
+    path.with_file_name(format!(".{file_name}.{}.tmp", std::process::id()))
+}
+
+fn write_atomic(path: &Path, format: Format, image: &image::DynamicImage) -> Result<(), OutputError> {
+    let tmp = tmp_name(path);
     let fmt = match format {
         Format::Png => image::ImageFormat::Png,
         Format::Exr => image::ImageFormat::OpenExr,

@@ -383,6 +383,9 @@ pub struct Setup {
     pub scene: String,
     pub width: u32,
     pub height: u32,
+    /// Scene time of every frame and of the reference, seconds.
+    #[serde(default)]
+    pub time: f32,
     pub settings: Vec<String>,
     pub spp: u32,
     pub device: String,
@@ -432,25 +435,14 @@ pub fn read_rows(path: &Path) -> Result<Vec<Row>, SweepError> {
 }
 
 /// Write `rows` as CSV to `path` atomically.
-pub fn write_rows(path: &Path, rows: &[Row]) -> Result<(), SweepError> {
+pub fn write_rows(path: &Path, rows: &[Row]) -> crate::Result<()> {
     let err = |message: String| SweepError::File { path: path.to_path_buf(), message };
     let mut w = csv::Writer::from_writer(Vec::new());
     for r in rows {
         w.serialize(r).map_err(|e| err(e.to_string()))?;
     }
     let bytes = w.into_inner().map_err(|e| err(e.to_string()))?;
-    write_atomic(path, &bytes)
-}
-
-/// Write bytes to a temporary sibling and rename it over `path`.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SweepError> {
-    let err = |e: std::io::Error| SweepError::File { path: path.to_path_buf(), message: e.to_string() };
-    let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, bytes).map_err(err)?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        err(e)
-    })
+    Ok(crate::output::write_bytes(path, &bytes)?)
 }
 
 /// The frontier picture of one metric.
@@ -530,6 +522,7 @@ pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Resul
         scene: opts.scene.display().to_string(),
         width: base.settings.width,
         height: base.settings.height,
+        time: base.settings.time,
         settings: common.settings(),
         spp: opts.spp,
         device: ctx.info.name.clone(),
@@ -545,17 +538,18 @@ pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Resul
             return Err(SweepError::SetupChanged { dir: dir.clone(), what, old, new }.into());
         }
     } else {
-        write_atomic(&setup_path, serde_json::to_string_pretty(&setup).expect("JSON").as_bytes())?;
+        crate::output::write_bytes(&setup_path, serde_json::to_string_pretty(&setup).expect("JSON").as_bytes())?;
     }
     eprintln!("sweep: {} configurations of {} on {}", configs.len(), opts.scene.display(), ctx.info.name);
 
     // The reference, cached under a key of everything that shapes it.
     let scene_text = std::fs::read_to_string(&opts.scene).unwrap_or_default();
     let key = format!(
-        "dvsgi {} | {}x{} | spp {} | sets {:?} | scene {}",
+        "dvsgi {} | {}x{} | t {} | spp {} | sets {:?} | scene {}",
         env!("CARGO_PKG_VERSION"),
         setup.width,
         setup.height,
+        setup.time,
         opts.spp,
         common.settings(),
         scene_text
@@ -587,7 +581,7 @@ pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Resul
             let noise_rmse =
                 (image.variance.iter().map(|&v| v as f64).sum::<f64>() / image.variance.len().max(1) as f64).sqrt();
             let k = ReferenceKey { key, seconds, relative_standard_error: image.relative_standard_error(), noise_rmse };
-            write_atomic(&key_path, serde_json::to_string_pretty(&k).expect("JSON").as_bytes())?;
+            crate::output::write_bytes(&key_path, serde_json::to_string_pretty(&k).expect("JSON").as_bytes())?;
             eprintln!(
                 "reference: {} spp in {seconds:.1} s, mean relative standard error {:.4}",
                 opts.spp, k.relative_standard_error
@@ -664,7 +658,10 @@ pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Resul
         knob_effects: knob_effects(&opts.grid, &rows),
         rows,
     };
-    write_atomic(&dir.join("results.json"), serde_json::to_string_pretty(&results).expect("JSON").as_bytes())?;
+    crate::output::write_bytes(
+        &dir.join("results.json"),
+        serde_json::to_string_pretty(&results).expect("JSON").as_bytes(),
+    )?;
     let scene_name = base.name.clone();
     for metric in METRICS {
         plot(
@@ -774,6 +771,7 @@ mod tests {
             scene: "s".into(),
             width: 1,
             height: 1,
+            time: 0.0,
             settings: vec![],
             spp: 4,
             device: "d".into(),

@@ -9,7 +9,7 @@ use dvsgi::cli::{check_validation, report, CommonArgs};
 use dvsgi::gpu::{Context, QueueTopology};
 use dvsgi::render::{Mode, RenderOptions, Renderer};
 use dvsgi::scene::Scene;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -161,11 +161,11 @@ fn run(args: Args) -> dvsgi::Result<()> {
     print_table(&ctx, &report);
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&report).expect("JSON serialisation");
-        write_atomic(path, text.as_bytes())?;
+        dvsgi::output::write_bytes(path, text.as_bytes())?;
         println!("wrote {}", path.display());
     }
     if let Some(path) = &args.timeline {
-        write_atomic(path, bench::timeline_svg(&report).as_bytes())?;
+        dvsgi::output::write_bytes(path, bench::timeline_svg(&report).as_bytes())?;
         println!("wrote {}", path.display());
     }
     Ok(())
@@ -276,12 +276,4 @@ fn print_table(ctx: &Context, r: &Report) {
             ctx.info.name
         );
     }
-}
-
-fn write_atomic(path: &Path, bytes: &[u8]) -> dvsgi::Result<()> {
-    let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path)).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        usage(format!("{}: could not write: {e}", path.display()))
-    })
 }

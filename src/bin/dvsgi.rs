@@ -16,6 +16,37 @@ struct Cli {
     command: Command,
 }
 
+/// `--width/--height/--time`, shared by the commands that render.
+#[derive(clap::Args)]
+struct SizeArgs {
+    /// Image width (overrides render.width).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height (overrides render.height).
+    #[arg(long)]
+    height: Option<u32>,
+    /// Scene time in seconds at which motion is evaluated (overrides render.time).
+    #[arg(long)]
+    time: Option<f32>,
+}
+
+impl SizeArgs {
+    /// As scene overrides.
+    fn overrides(&self) -> Vec<(String, String)> {
+        let mut extra = Vec::new();
+        if let Some(w) = self.width {
+            extra.push(("render.width".to_string(), w.to_string()));
+        }
+        if let Some(h) = self.height {
+            extra.push(("render.height".to_string(), h.to_string()));
+        }
+        if let Some(t) = self.time {
+            extra.push(("render.time".to_string(), format!("{t:?}")));
+        }
+        extra
+    }
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// List Vulkan devices and describe the chosen one (queues, features); with a scene,
@@ -31,15 +62,8 @@ enum Command {
         /// Output file(s): .png or .exr (repeatable).
         #[arg(long, short, required = true)]
         out: Vec<PathBuf>,
-        /// Image width (overrides render.width).
-        #[arg(long)]
-        width: Option<u32>,
-        /// Image height (overrides render.height).
-        #[arg(long)]
-        height: Option<u32>,
-        /// Scene time in seconds at which motion is evaluated (overrides render.time).
-        #[arg(long)]
-        time: Option<f32>,
+        #[command(flatten)]
+        size: SizeArgs,
         /// What to show: final | indirect | ao | voxel-albedo | voxel-normal | voxel-emission |
         /// voxel-radiance | voxel-mip (with --set render.view_lod=.. render.view_direction=..)
         /// (overrides render.view).
@@ -104,12 +128,8 @@ enum Command {
         /// Queue schedule of the timed frames.
         #[arg(long, default_value = "sync")]
         schedule: Mode,
-        /// Image width (overrides render.width).
-        #[arg(long)]
-        width: Option<u32>,
-        /// Image height (overrides render.height).
-        #[arg(long)]
-        height: Option<u32>,
+        #[command(flatten)]
+        size: SizeArgs,
     },
     /// Path-trace the ground truth: unbiased, the same scene model as the renderer. Writes
     /// linear radiance to each .exr OUT with the variance of each pixel's mean beside it
@@ -135,15 +155,8 @@ enum Command {
         /// renderer show lighting errors, not edge aliasing.
         #[arg(long)]
         jitter: bool,
-        /// Image width (overrides render.width).
-        #[arg(long)]
-        width: Option<u32>,
-        /// Image height (overrides render.height).
-        #[arg(long)]
-        height: Option<u32>,
-        /// Scene time in seconds (overrides render.time).
-        #[arg(long)]
-        time: Option<f32>,
+        #[command(flatten)]
+        size: SizeArgs,
     },
 }
 
@@ -164,35 +177,27 @@ fn run(cli: Cli) -> dvsgi::Result<()> {
         Command::Compare { test, reference, diff, exposure, tonemap, json } => {
             compare(&test, &reference, diff.as_deref(), exposure, &tonemap, json.as_deref())
         }
-        Command::Sweep { scene, out, grid, spp, frames, warmup, schedule, width, height } => {
+        Command::Sweep { scene, out, grid, spp, frames, warmup, schedule, size } => {
             let grid =
                 if grid.is_empty() { dvsgi::sweep::Grid::default_grid() } else { dvsgi::sweep::Grid::parse(&grid)? };
-            let opts = dvsgi::sweep::SweepOptions {
-                scene,
-                out,
-                grid,
-                spp,
-                frames,
-                warmup,
-                schedule,
-                size: size_overrides(width, height, None),
-            };
+            let opts =
+                dvsgi::sweep::SweepOptions { scene, out, grid, spp, frames, warmup, schedule, size: size.overrides() };
             let results = dvsgi::sweep::run(&cli.common, &opts)?;
             print_sweep(&results);
             println!("wrote {}/results.csv, results.json and frontier-*.svg", opts.out.display());
             Ok(())
         }
-        Command::Reference { scene, out, spp, bounces, seed, jitter, width, height, time } => {
+        Command::Reference { scene, out, spp, bounces, seed, jitter, size } => {
             let options =
                 dvsgi::reference::ReferenceOptions { spp, max_bounces: bounces, seed, jitter, ..Default::default() };
-            reference(&cli.common, &scene, &out, options, size_overrides(width, height, time))
+            reference(&cli.common, &scene, &out, options, size.overrides())
         }
-        Command::Render { scene, out, width, height, time, view, gi, schedule, frames, verbose } => {
+        Command::Render { scene, out, size, view, gi, schedule, frames, verbose } => {
             // Fail on unwritable targets before doing any work.
             for o in &out {
                 dvsgi::output::check_target(o)?;
             }
-            let mut extra = size_overrides(width, height, time);
+            let mut extra = size.overrides();
             if let Some(v) = view {
                 extra.push(("render.view".to_string(), format!("{v:?}")));
             }
@@ -288,7 +293,7 @@ fn compare(
     }
     if let Some(j) = json {
         let text = serde_json::to_string_pretty(&c).expect("JSON");
-        dvsgi::sweep::write_atomic(j, text.as_bytes())?;
+        dvsgi::output::write_bytes(j, text.as_bytes())?;
         println!("wrote {}", j.display());
     }
     Ok(())
@@ -321,21 +326,6 @@ fn print_sweep(results: &dvsgi::sweep::Results) {
             r.label, r.frame_ms, r.static_frame_ms, r.rmse, r.flip_mean, r.ssim_mean
         );
     }
-}
-
-/// `--width/--height/--time` as scene overrides.
-fn size_overrides(width: Option<u32>, height: Option<u32>, time: Option<f32>) -> Vec<(String, String)> {
-    let mut extra = Vec::new();
-    if let Some(w) = width {
-        extra.push(("render.width".to_string(), w.to_string()));
-    }
-    if let Some(h) = height {
-        extra.push(("render.height".to_string(), h.to_string()));
-    }
-    if let Some(t) = time {
-        extra.push(("render.time".to_string(), format!("{t:?}")));
-    }
-    extra
 }
 
 fn reference(
