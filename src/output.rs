@@ -110,6 +110,21 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     })
 }
 
+/// Write linear radiance through the renderer's display transform (exposure, tone map,
+/// sRGB) to a PNG file, atomically.
+pub fn write_display_png(
+    path: &Path,
+    image: &crate::metrics::LinearImage,
+    exposure: f32,
+    tonemap: crate::scene::ToneMap,
+) -> Result<(), OutputError> {
+    let rgb = crate::metrics::display_srgb8(image, exposure, tonemap);
+    write_png(
+        path,
+        &image::RgbImage::from_raw(image.width, image.height, rgb).expect("display buffer matches its size"),
+    )
+}
+
 fn tmp_name(path: &Path) -> PathBuf {
     let file_name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
     path.with_file_name(format!(".{file_name}.{}.tmp", std::process::id()))

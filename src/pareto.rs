@@ -50,14 +50,9 @@ pub enum PlotError {
         /// Plotters' error, as text.
         message: String,
     },
-    /// The file (or its temporary sibling) could not be written or renamed.
-    #[error("cannot write {}: {source}", path.display())]
-    Io {
-        /// The file that failed.
-        path: PathBuf,
-        /// The underlying error.
-        source: std::io::Error,
-    },
+    /// The file could not be written (the output layer's atomic write; the message names it).
+    #[error(transparent)]
+    Write(#[from] crate::output::OutputError),
 }
 
 /// Size of the picture in SVG user units (pixels).
@@ -73,8 +68,8 @@ const DOMINATED_COLOR: RGBColor = RGBColor(150, 150, 150);
 /// With `log_y` the y axis is logarithmic, and y values ≤ 0 are drawn at half the smallest
 /// positive y (at 1 if there is none). Points with a non-finite coordinate are left out.
 ///
-/// The picture is rendered in memory, written to `path.with_extension("svg.tmp")` and then
-/// renamed onto `path`, so a failure never leaves a half-written `path`. SVG text needs no
+/// The picture is rendered in memory and written with [`crate::output::write_bytes`]
+/// (a temporary sibling renamed onto `path`), so a failure never leaves a half-written `path`. SVG text needs no
 /// font files: plotters' SVG backend emits `<text>` elements with a font-family name.
 pub fn frontier_svg(
     path: &Path,
@@ -118,7 +113,7 @@ pub fn frontier_svg(
         result.and_then(|()| root.present())
     };
     drawn.map_err(|e| PlotError::Draw { path: path.to_path_buf(), message: e.to_string() })?;
-    write_atomically(path, svg.as_bytes())
+    Ok(crate::output::write_bytes(path, svg.as_bytes())?)
 }
 
 struct Spec<'a> {
@@ -239,20 +234,6 @@ fn tick(v: f64) -> String {
     }
 }
 
-/// Writes `bytes` to `path.with_extension("svg.tmp")`, then renames it onto `path`; on any
-/// failure the temporary file is removed.
-fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), PlotError> {
-    let tmp = path.with_extension("svg.tmp");
-    let result =
-        std::fs::write(&tmp, bytes).map_err(|source| PlotError::Io { path: tmp.clone(), source }).and_then(|()| {
-            std::fs::rename(&tmp, path).map_err(|source| PlotError::Io { path: path.to_path_buf(), source })
-        });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -329,8 +310,9 @@ mod tests {
             let text = std::fs::read_to_string(&path).unwrap();
             check_svg(&text, &points, "Cornell box: time vs FLIP");
             assert!(text.contains("GPU time (ms)") && text.contains("mean FLIP"));
-            assert!(!path.with_extension("svg.tmp").exists());
         }
+        // Only the two pictures: no temporary file left behind.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
     }
 
     #[test]
@@ -353,7 +335,8 @@ mod tests {
         let path = dir.path().join("no-such-dir").join("plot.svg");
         let e = frontier_svg(&path, "t", "x", "y", &sample_points(), false, false).unwrap_err();
         assert!(e.to_string().contains("no-such-dir"), "{e}");
-        assert!(!path.exists() && !path.with_extension("svg.tmp").exists());
+        assert!(!path.exists());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "nothing written");
     }
 
     #[test]

@@ -592,9 +592,7 @@ pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Resul
     crate::cli::check_validation(&ctx)?;
     let png_path = dir.join("reference.png");
     if !png_path.exists() {
-        let rgb = crate::metrics::display_srgb8(&reference, base.settings.exposure, base.settings.tonemap);
-        let png = image::RgbImage::from_raw(reference.width, reference.height, rgb).expect("display size");
-        crate::output::write_png(&png_path, &png)?;
+        crate::output::write_display_png(&png_path, &reference, base.settings.exposure, base.settings.tonemap)?;
     }
 
     let csv_path = dir.join("results.csv");

@@ -382,10 +382,7 @@ fn reference(
         } else {
             let linear =
                 dvsgi::metrics::LinearImage { width: image.width, height: image.height, rgb: image.mean.clone() };
-            let s = &scene.settings;
-            let rgb = dvsgi::metrics::display_srgb8(&linear, s.exposure, s.tonemap);
-            let png = image::RgbImage::from_raw(image.width, image.height, rgb).expect("display size");
-            dvsgi::output::write_png(out, &png)?;
+            dvsgi::output::write_display_png(out, &linear, scene.settings.exposure, scene.settings.tonemap)?;
             println!("wrote {}", out.display());
         }
     }

@@ -13,7 +13,7 @@ pub mod bvh;
 use crate::gpu::{shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuResult, Image, ImageDesc, Pipeline};
 use crate::render::graph::{Pass, Use};
 use crate::render::passes::readback::{HostReadPass, ImageDownload};
-use crate::render::scene_gpu::{upload_buffer, SceneGpu};
+use crate::render::scene_gpu::{upload_buffer, MaterialTable};
 use crate::render::{lights, Mode, Scheduler};
 use crate::scene::Scene;
 use ash::vk;
@@ -194,7 +194,7 @@ pub struct PathTracer {
     ctx: Arc<Context>,
     pass: TracePass,
     // Keeps the material table and textures the descriptor set points at alive.
-    _scene_gpu: SceneGpu,
+    _materials: MaterialTable,
     scheduler: Scheduler,
     options: ReferenceOptions,
     done: u32,
@@ -257,7 +257,7 @@ impl PathTracer {
             gpu_lights.push(lights::GpuLight::default());
         }
         let light_buf = Arc::new(upload_buffer(ctx, "reference lights", bytemuck::cast_slice(&gpu_lights), storage)?);
-        let scene_gpu = SceneGpu::new(ctx, scene)?;
+        let materials = MaterialTable::new(ctx, scene)?;
 
         let cam = &scene.camera;
         let view_proj = cam.projection(width as f32 / height as f32) * cam.view();
@@ -275,7 +275,7 @@ impl PathTracer {
         };
         let accum = image("reference sum")?;
         let accum_sq = image("reference sum of squares")?;
-        let views = scene_gpu.texture_views();
+        let [material_bind, texture_bind] = materials.binds();
         let set = DescriptorSet::new(
             ctx,
             "path trace",
@@ -285,19 +285,21 @@ impl PathTracer {
                 Bind::Storage(&nodes),
                 Bind::Storage(&tri_buf),
                 Bind::Storage(&shade_buf),
-                Bind::Storage(&scene_gpu.materials),
+                material_bind,
                 Bind::Storage(&light_buf),
-                Bind::SampledArray(
-                    views.clone(),
-                    scene_gpu.texture_sampler.raw,
-                    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                ),
+                texture_bind,
                 Bind::StorageImage(accum.view),
                 Bind::StorageImage(accum_sq.view),
             ],
         )?;
-        let pipeline =
-            Pipeline::compute(ctx, "path trace", shaders::PT_TRACE_COMP, &[set.layout], 8, &[(0, views.len() as u32)])?;
+        let pipeline = Pipeline::compute(
+            ctx,
+            "path trace",
+            shaders::PT_TRACE_COMP,
+            &[set.layout],
+            8,
+            &[(0, materials.texture_count())],
+        )?;
         let pass = TracePass {
             buffers: vec![uniform, nodes, tri_buf, shade_buf, light_buf],
             accum,
@@ -310,7 +312,7 @@ impl PathTracer {
         Ok(PathTracer {
             ctx: ctx.clone(),
             pass,
-            _scene_gpu: scene_gpu,
+            _materials: materials,
             scheduler: Scheduler::new(ctx, Mode::Sync, 1)?,
             options,
             done: 0,

@@ -3,7 +3,7 @@
 //! each frame for moving objects.
 
 use crate::gpu::sync::{barrier, Access};
-use crate::gpu::{Buffer, Context, GpuResult, Image, ImageDesc, Sampler};
+use crate::gpu::{Bind, Buffer, Context, GpuResult, Image, ImageDesc, Sampler};
 use crate::render::graph::Use;
 use crate::scene::Scene;
 use ash::vk;
@@ -61,14 +61,87 @@ pub struct Draw {
 pub struct SceneGpu {
     pub vertices: Buffer,
     pub indices: Buffer,
-    pub materials: Buffer,
+    pub materials: MaterialTable,
     /// Device-local; written each frame by the upload pass.
     pub instances: Arc<Buffer>,
+    pub draws: Vec<Draw>,
+}
+
+/// The material table and the albedo textures it indexes: all a shader needs to shade a
+/// surface (the rasterizer's passes and the reference path tracer share it).
+pub struct MaterialTable {
+    /// `GpuMaterial` per scene material.
+    pub buffer: Buffer,
     pub textures: Vec<Image>,
     /// Bound when the scene has no textures (descriptor arrays cannot be empty).
     pub placeholder_texture: Option<Image>,
-    pub texture_sampler: Sampler,
-    pub draws: Vec<Draw>,
+    pub sampler: Sampler,
+}
+
+impl MaterialTable {
+    pub fn new(ctx: &Arc<Context>, scene: &Scene) -> GpuResult<MaterialTable> {
+        let materials: Vec<GpuMaterial> = scene
+            .materials
+            .iter()
+            .map(|m| GpuMaterial {
+                albedo: Vec4::from((m.albedo, 1.0)).to_array(),
+                specular: Vec4::from((m.specular, m.shininess)).to_array(),
+                emission: Vec4::from((m.emission, 0.0)).to_array(),
+                texture: [m.albedo_texture.map(|t| t as i32).unwrap_or(-1), 0, 0, 0],
+            })
+            .collect();
+        let buffer = upload_buffer(
+            ctx,
+            "scene materials",
+            bytemuck::cast_slice(&materials),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let mut textures = Vec::new();
+        for (i, t) in scene.textures.iter().enumerate() {
+            let name = format!("texture {i} ({})", t.path.display());
+            textures.push(upload_texture(ctx, &name, t.width, t.height, &t.rgba8)?);
+        }
+        let placeholder_texture = if textures.is_empty() {
+            Some(upload_texture(ctx, "placeholder texture", 1, 1, &[255, 255, 255, 255])?)
+        } else {
+            None
+        };
+        let sampler = Sampler::new(
+            ctx,
+            "texture sampler",
+            &vk::SamplerCreateInfo::default()
+                .mag_filter(vk::Filter::LINEAR)
+                .min_filter(vk::Filter::LINEAR)
+                .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+                .address_mode_u(vk::SamplerAddressMode::REPEAT)
+                .address_mode_v(vk::SamplerAddressMode::REPEAT)
+                .address_mode_w(vk::SamplerAddressMode::REPEAT)
+                .max_lod(vk::LOD_CLAMP_NONE),
+        )?;
+        Ok(MaterialTable { buffer, textures, placeholder_texture, sampler })
+    }
+
+    /// Views for the texture descriptor array (never empty).
+    pub fn texture_views(&self) -> Vec<vk::ImageView> {
+        if let Some(p) = &self.placeholder_texture {
+            vec![p.view]
+        } else {
+            self.textures.iter().map(|t| t.view).collect()
+        }
+    }
+
+    /// Length of the texture descriptor array (the shaders' TEXTURE_COUNT).
+    pub fn texture_count(&self) -> u32 {
+        self.textures.len().max(1) as u32
+    }
+
+    /// The two bindings a shading shader declares: the material table, then the textures.
+    pub fn binds(&self) -> [Bind<'_>; 2] {
+        [
+            Bind::Storage(&self.buffer),
+            Bind::SampledArray(self.texture_views(), self.sampler.raw, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
+        ]
+    }
 }
 
 /// Upload `data` into a new device-local buffer (load time only: waits for the copy).
@@ -199,22 +272,6 @@ impl SceneGpu {
             bytemuck::cast_slice(&indices),
             vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
-        let materials: Vec<GpuMaterial> = scene
-            .materials
-            .iter()
-            .map(|m| GpuMaterial {
-                albedo: Vec4::from((m.albedo, 1.0)).to_array(),
-                specular: Vec4::from((m.specular, m.shininess)).to_array(),
-                emission: Vec4::from((m.emission, 0.0)).to_array(),
-                texture: [m.albedo_texture.map(|t| t as i32).unwrap_or(-1), 0, 0, 0],
-            })
-            .collect();
-        let material_buffer = upload_buffer(
-            ctx,
-            "scene materials",
-            bytemuck::cast_slice(&materials),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
         let instances = Arc::new(Buffer::new(
             ctx,
             "scene instances",
@@ -222,36 +279,11 @@ impl SceneGpu {
             vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )?);
-        let mut textures = Vec::new();
-        for (i, t) in scene.textures.iter().enumerate() {
-            let name = format!("texture {i} ({})", t.path.display());
-            textures.push(upload_texture(ctx, &name, t.width, t.height, &t.rgba8)?);
-        }
-        let placeholder_texture = if textures.is_empty() {
-            Some(upload_texture(ctx, "placeholder texture", 1, 1, &[255, 255, 255, 255])?)
-        } else {
-            None
-        };
-        let texture_sampler = Sampler::new(
-            ctx,
-            "texture sampler",
-            &vk::SamplerCreateInfo::default()
-                .mag_filter(vk::Filter::LINEAR)
-                .min_filter(vk::Filter::LINEAR)
-                .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
-                .address_mode_u(vk::SamplerAddressMode::REPEAT)
-                .address_mode_v(vk::SamplerAddressMode::REPEAT)
-                .address_mode_w(vk::SamplerAddressMode::REPEAT)
-                .max_lod(vk::LOD_CLAMP_NONE),
-        )?;
         Ok(SceneGpu {
             vertices: vertex_buffer,
             indices: index_buffer,
-            materials: material_buffer,
+            materials: MaterialTable::new(ctx, scene)?,
             instances,
-            textures,
-            placeholder_texture,
-            texture_sampler,
             draws,
         })
     }
@@ -274,15 +306,6 @@ impl SceneGpu {
             })
             .collect();
         bytemuck::cast_slice(&data).to_vec()
-    }
-
-    /// Views for the texture descriptor array (never empty).
-    pub fn texture_views(&self) -> Vec<vk::ImageView> {
-        if let Some(p) = &self.placeholder_texture {
-            vec![p.view]
-        } else {
-            self.textures.iter().map(|t| t.view).collect()
-        }
     }
 
     /// Bind the vertex and index buffers and issue every draw.

@@ -75,17 +75,12 @@ impl GBufferPass {
         frame: &FrameBuffers,
         gbuffer: &Arc<GBuffer>,
     ) -> GpuResult<Self> {
-        let views = scene.texture_views();
+        let [materials, textures] = scene.materials.binds();
         let set = DescriptorSet::new(
             ctx,
             "gbuffer",
             vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
-            &[
-                Bind::Uniform(&frame.uniforms),
-                Bind::Storage(&scene.instances),
-                Bind::Storage(&scene.materials),
-                Bind::SampledArray(views.clone(), scene.texture_sampler.raw, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
-            ],
+            &[Bind::Uniform(&frame.uniforms), Bind::Storage(&scene.instances), materials, textures],
         )?;
         let pipeline = Pipeline::graphics(
             ctx,
@@ -103,7 +98,7 @@ impl GBufferPass {
                 depth_bias: false,
                 depth_clamp: false,
                 conservative: false,
-                spec: &[(0, views.len() as u32)],
+                spec: &[(0, scene.materials.texture_count())],
             },
             &[set.layout],
             0,

@@ -28,13 +28,8 @@ impl Voxelizer {
         frame: &FrameBuffers,
         volumes: &Arc<VoxelVolumes>,
     ) -> GpuResult<Arc<Self>> {
-        let views = scene.texture_views();
-        let mut binds = vec![
-            Bind::Uniform(&frame.uniforms),
-            Bind::Storage(&scene.instances),
-            Bind::Storage(&scene.materials),
-            Bind::SampledArray(views.clone(), scene.texture_sampler.raw, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
-        ];
+        let mut binds = vec![Bind::Uniform(&frame.uniforms), Bind::Storage(&scene.instances)];
+        binds.extend(scene.materials.binds());
         binds.extend(volumes.binds());
         let set = DescriptorSet::new(
             ctx,
@@ -60,7 +55,7 @@ impl Voxelizer {
                 depth_clamp: false,
                 conservative: hardware_conservative,
                 spec: &[
-                    (0, views.len() as u32),
+                    (0, scene.materials.texture_count()),
                     (1, u32::from(!hardware_conservative)),
                     (2, u32::from(volumes.needs.emission)),
                     (3, u32::from(volumes.needs.dynamic)),
