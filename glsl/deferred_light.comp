@@ -47,7 +47,8 @@ void main() {
     vec3 ks = texelFetch(g_specular, px, 0).rgb;
     vec3 V = safe_normalize(frame.camera_pos.xyz - P, N);
 
-    vec3 radiance = texelFetch(g_emission, px, 0).rgb;
+    float unscale = frame.radiance_scale.y;  // 16-bit inputs hold radiance * scale
+    vec3 radiance = texelFetch(g_emission, px, 0).rgb * unscale;
     vec4 cone_vis = CONE_SHADOWS ? imageLoad(gi_shadow, px) : vec4(1.0);
     uint light_count = frame.counts.z;
     for (uint i = 0u; i < light_count; ++i) {
@@ -73,8 +74,8 @@ void main() {
     if (GI) {
         vec4 d = imageLoad(gi_diffuse, px);
         ao = clamp(d.a, 0.0, 1.0);
-        indirect = albedo * max(d.rgb, vec3(0.0));
-        if (GI_SPECULAR) indirect += ks * max(imageLoad(gi_specular, px).rgb, vec3(0.0));
+        indirect = albedo * max(d.rgb, vec3(0.0)) * unscale;
+        if (GI_SPECULAR) indirect += ks * max(imageLoad(gi_specular, px).rgb, vec3(0.0)) * unscale;
         indirect *= ao;
     }
     vec3 result = OUTPUT == 1u ? indirect : (OUTPUT == 2u ? vec3(ao) : radiance + indirect);

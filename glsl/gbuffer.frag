@@ -18,7 +18,7 @@ layout(location = 3) flat in uint v_material;
 layout(location = 0) out vec4 out_albedo;    // R8G8B8A8_SRGB: linear written, sRGB stored
 layout(location = 1) out vec4 out_normal;    // RGBA16F: world normal, a shininess
 layout(location = 2) out vec4 out_specular;  // R8G8B8A8_SRGB: Ks
-layout(location = 3) out vec4 out_emission;  // RGBA16F: emitted radiance
+layout(location = 3) out vec4 out_emission;  // RGBA16F: emitted radiance * radiance scale
 
 void main() {
     Material m = materials[v_material];
@@ -35,5 +35,5 @@ void main() {
     out_albedo = vec4(clamp(albedo, 0.0, 1.0), 1.0);
     out_normal = vec4(n, clamp(m.specular.a, 0.0, HALF_MAX));
     out_specular = vec4(clamp(m.specular.rgb, 0.0, 1.0), 1.0);
-    out_emission = vec4(min(max(m.emission.rgb, 0.0), vec3(HALF_MAX)), 1.0);
+    out_emission = vec4(min(max(m.emission.rgb, 0.0) * frame.radiance_scale.x, vec3(HALF_MAX)), 1.0);
 }

@@ -97,7 +97,9 @@ void main() {
     vec3 irradiance = vec3(0.0);
     for (uint i = 0u; i < frame.counts.z; ++i) {
         Light l = lights[i];
-        LightSample s = sample_light(l, center);
+        // Not nearer than half a voxel: a voxel stands for its whole extent, over which the
+        // irradiance of a light inside it averages to a finite value.
+        LightSample s = sample_light_near(l, center, 0.5 * voxel);
         float att = attenuation(n_avg, s.wi);
         if (att <= 0.0 || max(s.irradiance.r, max(s.irradiance.g, s.irradiance.b)) <= 0.0) continue;
         float vis = 1.0;
@@ -117,5 +119,5 @@ void main() {
     if (HAS_EMISSION) {
         radiance += unpack_rgb_count(imageLoad(vox_emission, c).r).rgb / 255.0 * grid.params.x;
     }
-    imageStore(vox_radiance, c, vec4(min(radiance, vec3(HALF_MAX)), 1.0));
+    imageStore(vox_radiance, c, vec4(min(radiance * grid.params.y, vec3(HALF_MAX)), 1.0));
 }

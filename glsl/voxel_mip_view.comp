@@ -42,5 +42,5 @@ void main() {
             alpha += (1.0 - alpha) * c;
         }
     }
-    imageStore(out_radiance, px, vec4(color, 1.0));
+    imageStore(out_radiance, px, vec4(color * grid.params.z, 1.0));  // volumes hold radiance * scale
 }

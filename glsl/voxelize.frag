@@ -17,7 +17,7 @@ layout(set = 0, binding = 4) uniform GridBlock { VoxelGrid grid; };
 layout(set = 0, binding = 5, r32ui) uniform coherent uimage3D vox_albedo;
 layout(set = 0, binding = 6, r32ui) uniform coherent uimage3D vox_normal;
 layout(set = 0, binding = 7, r32ui) uniform coherent uimage3D vox_emission;
-layout(set = 0, binding = 8, r8ui) uniform writeonly uimage3D vox_flags;
+layout(set = 0, binding = 8, r8ui) uniform uimage3D vox_flags;
 
 layout(push_constant) uniform Push { uint mark_static; } pc;
 
@@ -68,6 +68,10 @@ void main() {
         vec3 voxel = from_uvw(vec3(px, k), g_axis);
         if (!triangle_box_overlap(voxel + 0.5, vec3(0.5), g_t0, g_t1, g_t2)) continue;
         ivec3 vc = ivec3(voxel);
+        // Dynamic geometry leaves static voxels alone: the dynamic clear keeps them, so every
+        // update would average its samples in again and the static voxel would drift toward
+        // the dynamic object's albedo and normal until its sample count saturates.
+        if (HAS_FLAGS && pc.mark_static == 0u && imageLoad(vox_flags, vc).r != 0u) continue;
         average_albedo(vc, albedo);
         average_normal(vc, nrm * 0.5 + 0.5);
         if (HAS_EMISSION) {

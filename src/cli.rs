@@ -73,3 +73,26 @@ pub fn report(e: &dyn std::error::Error) {
         source = s.source();
     }
 }
+
+/// Prints this crate's `log` warnings and errors on stderr ("warning: ..."), e.g. the scene
+/// loader's warnings about missing textures or unused materials. Other crates' log records
+/// are not shown. Calling it more than once is harmless.
+pub fn init_logging() {
+    struct Stderr;
+    impl log::Log for Stderr {
+        fn enabled(&self, m: &log::Metadata) -> bool {
+            m.level() <= log::Level::Warn && m.target().starts_with("dvsgi")
+        }
+        fn log(&self, r: &log::Record) {
+            if self.enabled(r.metadata()) {
+                let level = if r.level() == log::Level::Error { "error" } else { "warning" };
+                eprintln!("{level}: {}", r.args());
+            }
+        }
+        fn flush(&self) {}
+    }
+    static LOGGER: Stderr = Stderr;
+    if log::set_logger(&LOGGER).is_ok() {
+        log::set_max_level(log::LevelFilter::Warn);
+    }
+}

@@ -14,6 +14,7 @@ pub mod pareto;
 pub mod reference;
 pub mod render;
 pub mod scene;
+pub mod soak;
 pub mod sweep;
 
 pub use error::{Error, Result};

@@ -303,8 +303,16 @@ fn missing_and_corrupt_textures() {
     let dir = tempfile::tempdir().unwrap();
     let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl a\nf 1/1 2/1 3/1\n";
     let p = scene_with_obj(dir.path(), obj, Some("newmtl a\nKd 1 1 1\nmap_Kd missing.png\n"));
-    let err = render_fails(&p, &[], &[]);
-    assert!(err.contains("missing.png") && err.contains("m.mtl"), "{err}");
+    // A missing texture is a warning (the material keeps its Kd colour) ...
+    let png = dir.path().join("out.png");
+    let o =
+        dvsgi(&["render", p.to_str().unwrap(), "--out", png.to_str().unwrap(), "--width", "32", "--height", "32"], &[]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("warning: ") && err.contains("m.mtl: line 3") && err.contains("`missing.png`"), "{err}");
+    assert!(png.is_file());
+    std::fs::remove_file(&png).unwrap();
+    // ... a texture that exists but cannot be decoded is an error.
     write(dir.path(), "bad.png", "this is not a png");
     write(dir.path(), "m.mtl", "newmtl a\nKd 1 1 1\nmap_Kd bad.png\n");
     let err = render_fails(&p, &[], &[]);

@@ -307,11 +307,13 @@ fn dynamic_update_clears_old_voxels_and_keeps_static_ones() {
     assert_no_validation_messages(&ctx);
 }
 
-/// RGBA16F voxel radiance volume as f32 RGBA.
+/// RGBA16F voxel radiance volume as f32 RGBA, rgb in radiance units (the volume holds radiance
+/// times the scene's radiance scale; alpha is occupancy).
 fn radiance_volume(r: &mut Renderer) -> Vec<[f32; 4]> {
     let img = r.voxels().unwrap().radiance.clone();
+    let k = 1.0 / r.voxels().unwrap().radiance_scale;
     let halves: Vec<half::f16> = bytemuck::pod_collect_to_vec(&r.download(&img).unwrap());
-    halves.chunks_exact(4).map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32(), c[3].to_f32()]).collect()
+    halves.chunks_exact(4).map(|c| [c[0].to_f32() * k, c[1].to_f32() * k, c[2].to_f32() * k, c[3].to_f32()]).collect()
 }
 
 fn cornell_vct(overrides: &[(&str, &str)]) -> Scene {

@@ -4,7 +4,9 @@
 
 const float PI = 3.14159265358979323846;
 const float INV_PI = 0.31830988618379067154;
-// Largest finite half float; radiance written to 16-bit targets is clamped here.
+// Largest finite half float. Radiance in 16-bit targets is stored times the scene's radiance
+// scale (FrameData.radiance_scale, VoxelGrid.params.y), which keeps it in range; the clamp to
+// HALF_MAX is only a last guard.
 const float HALF_MAX = 65504.0;
 
 struct FrameData {
@@ -15,6 +17,7 @@ struct FrameData {
     vec4 camera_pos;   // xyz camera position, w scene time (s)
     uvec4 counts;      // x width, y height, z light count, w tone map (0 aces, 1 reinhard, 2 clamp)
     vec4 shadow;       // x PCF radius (texels), y normal bias (texels), z shadow map size, w exposure scale 2^EV
+    vec4 radiance_scale;  // x: 16-bit radiance targets hold radiance * x (a power of two), y = 1/x
 };
 
 // Normalize, or `fallback` for a zero-length / non-finite vector.

@@ -23,7 +23,8 @@ struct LightSample {
     vec3 irradiance;  // W/m^2 on a surface facing the light (before the cosine)
 };
 
-LightSample sample_light(Light l, vec3 P) {
+// `min_distance`: point and spot lights are evaluated no nearer than this.
+LightSample sample_light_near(Light l, vec3 P, float min_distance) {
     LightSample s;
     uint type = uint(l.position.w);
     if (type == LIGHT_DIRECTIONAL) {
@@ -33,7 +34,7 @@ LightSample sample_light(Light l, vec3 P) {
         return s;
     }
     vec3 d = l.position.xyz - P;
-    float d2 = max(dot(d, d), 1e-12);
+    float d2 = max(dot(d, d), max(min_distance * min_distance, 1e-12));
     s.distance = sqrt(d2);
     s.wi = d / s.distance;
     s.irradiance = l.color.rgb / d2;
@@ -44,6 +45,10 @@ LightSample sample_light(Light l, vec3 P) {
         s.irradiance *= smoothstep(lo, hi, cos_theta);
     }
     return s;
+}
+
+LightSample sample_light(Light l, vec3 P) {
+    return sample_light_near(l, P, 0.0);
 }
 
 #endif

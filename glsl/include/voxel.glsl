@@ -5,7 +5,8 @@
 struct VoxelGrid {
     vec4 origin;     // xyz world position of the grid's min corner, w voxel size (world units)
     uvec4 dims;      // x voxels per side
-    vec4 params;     // x emission scale: voxels store emission / scale in 8 bits
+    vec4 params;     // x emission scale: voxels store emission / scale in 8 bits;
+                     // y radiance scale: radiance volumes hold radiance * y; z = 1/y
 };
 
 // Voxel volumes store RGB in 8 bits each plus an 8-bit sample count (R32_UINT, for atomics).

@@ -1,7 +1,7 @@
 //! `dvsgi`: render scenes headless and inspect devices.
 
 use clap::{Parser, Subcommand};
-use dvsgi::cli::{check_validation, report, CommonArgs};
+use dvsgi::cli::{check_validation, init_logging, report, CommonArgs};
 use dvsgi::gpu::Context;
 use dvsgi::render::{Mode, RenderOptions, Renderer};
 use std::path::PathBuf;
@@ -41,7 +41,10 @@ impl SizeArgs {
             extra.push(("render.height".to_string(), h.to_string()));
         }
         if let Some(t) = self.time {
-            extra.push(("render.time".to_string(), format!("{t:?}")));
+            // `{:?}` writes NaN as `NaN`, which is not TOML; the scene layer then names the
+            // key and says the value is not finite.
+            let v = if t.is_nan() { "nan".to_string() } else { format!("{t:?}") };
+            extra.push(("render.time".to_string(), v));
         }
         extra
     }
@@ -123,7 +126,8 @@ enum Command {
         /// Timed frames per configuration (each scenario), after --warmup.
         #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=10_000))]
         frames: u32,
-        #[arg(long, default_value_t = 1)]
+        /// Untimed frames before each configuration's timed ones.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=10_000))]
         warmup: u32,
         /// Queue schedule of the timed frames.
         #[arg(long, default_value = "sync")]
@@ -162,6 +166,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    init_logging();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -443,6 +448,12 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
             scene.triangle_count(),
             scene.materials.len(),
             scene.lights.len()
+        );
+        let estimate = dvsgi::render::budget::Estimate::of(&scene);
+        println!(
+            "  GPU memory estimated before allocating: {:.2} MiB (device-local heap {:.0} MiB)",
+            estimate.total() as f64 / (1024.0 * 1024.0),
+            ctx.info.device_local_heap as f64 / (1024.0 * 1024.0)
         );
         let before = ctx.allocated_bytes();
         let renderer = Renderer::new(&ctx, scene)?;

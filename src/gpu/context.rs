@@ -5,7 +5,7 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::ffi::{c_void, CStr, CString};
 use std::mem::ManuallyDrop;
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 use std::sync::Mutex;
 use std::time::Duration;
 
@@ -83,6 +83,10 @@ pub struct DeviceInfo {
     pub timestamp_period_ns: f32,
     pub limits: vk::PhysicalDeviceLimits,
     pub optional: OptionalFeatures,
+    /// Size of the largest DEVICE_LOCAL memory heap (bytes): what a frame's resources must fit.
+    pub device_local_heap: u64,
+    /// `maxMemoryAllocationSize` (Vulkan 1.1): the largest single allocation.
+    pub max_allocation: u64,
 }
 
 impl DeviceInfo {
@@ -139,10 +143,26 @@ pub struct Context {
     allocator: ManuallyDrop<Mutex<Allocator>>,
     /// Serialises vkQueueSubmit on the (possibly shared) queue.
     pub submit_lock: Mutex<()>,
+    /// How long any GPU wait may take, in nanoseconds (`gpu_timeout`).
+    timeout_ns: AtomicU64,
+    /// A wait timed out or the device was lost: teardown must not wait for the GPU again.
+    failed: AtomicBool,
 }
 
-/// Every GPU wait uses this timeout (a lost device or a hang becomes an error, not a hang).
+/// How long a GPU wait may take before it is an error (a lost device or a hang becomes an
+/// error, never a hang) on a GPU; `DVSGI_GPU_TIMEOUT=SECONDS` overrides it.
 pub const GPU_TIMEOUT: Duration = Duration::from_secs(60);
+/// The same on a CPU device (lavapipe), where one frame of a 256^3 grid takes a minute.
+pub const CPU_DEVICE_TIMEOUT: Duration = Duration::from_secs(600);
+
+/// `DVSGI_GPU_TIMEOUT` in seconds, if set.
+fn env_timeout() -> GpuResult<Option<Duration>> {
+    let Ok(v) = std::env::var("DVSGI_GPU_TIMEOUT") else { return Ok(None) };
+    match v.trim().parse::<f64>() {
+        Ok(s) if (1e-9..=1e6).contains(&s) => Ok(Some(Duration::from_secs_f64(s))),
+        _ => Err(GpuError::Limit(format!("DVSGI_GPU_TIMEOUT={v:?} is not a number of seconds in 1e-9..=1e6"))),
+    }
+}
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
@@ -294,10 +314,18 @@ impl Context {
                     buffer_device_address: false,
                     allocation_sizes: Default::default(),
                 })
-                .map_err(|e| GpuError::Alloc { name: "allocator".into(), source: e });
+                .map_err(|e| GpuError::Alloc { name: "allocator".into(), bytes: 0, source: e });
                 let allocator = match allocator {
                     Ok(a) => a,
                     Err(e) => {
+                        unsafe { device.destroy_device(None) };
+                        return Err(cleanup(e));
+                    }
+                };
+                let timeout = match env_timeout() {
+                    Ok(t) => t.unwrap_or(if info.is_cpu() { CPU_DEVICE_TIMEOUT } else { GPU_TIMEOUT }),
+                    Err(e) => {
+                        drop(allocator);
                         unsafe { device.destroy_device(None) };
                         return Err(cleanup(e));
                     }
@@ -318,6 +346,8 @@ impl Context {
                     validation: counts,
                     allocator: ManuallyDrop::new(Mutex::new(allocator)),
                     submit_lock: Mutex::new(()),
+                    timeout_ns: AtomicU64::new(timeout.as_nanos() as u64),
+                    failed: AtomicBool::new(false),
                 };
                 ctx.name_object(ctx.graphics_queue.raw, "graphics queue");
                 if ctx.topology != QueueTopology::SingleQueue {
@@ -547,9 +577,18 @@ impl Context {
 
         // Description.
         let mut driver = vk::PhysicalDeviceDriverProperties::default();
-        let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        let mut maint3 = vk::PhysicalDeviceMaintenance3Properties::default();
+        let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver).push_next(&mut maint3);
         unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
         let props = p2.properties;
+        let max_allocation = maint3.max_memory_allocation_size;
+        let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
+        let device_local_heap = memory.memory_heaps[..memory.memory_heap_count as usize]
+            .iter()
+            .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+            .map(|h| h.size)
+            .max()
+            .unwrap_or(0);
         let info = DeviceInfo {
             index,
             name: cstr_field(&props.device_name),
@@ -571,6 +610,8 @@ impl Context {
             timestamp_period_ns: props.limits.timestamp_period,
             limits: props.limits,
             optional,
+            device_local_heap,
+            max_allocation,
         };
         Ok((device, debug_utils, gq, cq, topology, info))
     }
@@ -642,16 +683,41 @@ impl Context {
             .then_some([self.graphics_queue.family, self.compute_queue.family])
     }
 
-    /// Wait for fences with the global timeout; a timeout or loss is an error, never a hang.
-    pub fn wait_fences(&self, fences: &[vk::Fence], what: &str) -> GpuResult<()> {
-        match unsafe { self.device.wait_for_fences(fences, true, GPU_TIMEOUT.as_nanos() as u64) } {
-            Ok(()) => Ok(()),
+    /// How long any GPU wait may take before it is an error.
+    pub fn gpu_timeout(&self) -> Duration {
+        Duration::from_nanos(self.timeout_ns.load(Ordering::SeqCst))
+    }
+
+    /// Change the GPU wait timeout (tests; `DVSGI_GPU_TIMEOUT` sets it for a process).
+    pub fn set_gpu_timeout(&self, timeout: Duration) {
+        self.timeout_ns.store(timeout.as_nanos().clamp(1, u64::MAX as u128) as u64, Ordering::SeqCst);
+    }
+
+    /// Whether a wait timed out or the device was lost. Teardown then neither waits for the
+    /// GPU nor frees what it may still use: the resources are left to the process's exit.
+    pub fn has_failed(&self) -> bool {
+        self.failed.load(Ordering::SeqCst)
+    }
+
+    /// The result of a bounded wait (`call` with `gpu_timeout`): a timeout or a lost device is
+    /// an error naming `what`, and marks the context failed.
+    pub fn wait_result(&self, r: Result<(), vk::Result>, call: &'static str, what: &str) -> GpuResult<()> {
+        let err = match r {
+            Ok(()) => return Ok(()),
             Err(vk::Result::TIMEOUT) => {
-                Err(GpuError::Timeout { what: what.to_string(), seconds: GPU_TIMEOUT.as_secs_f64() })
+                GpuError::Timeout { what: what.to_string(), seconds: self.gpu_timeout().as_secs_f64() }
             }
-            Err(vk::Result::ERROR_DEVICE_LOST) => Err(GpuError::DeviceLost(format!("waiting for {what}"))),
-            Err(result) => Err(GpuError::Vk { call: "vkWaitForFences", result }),
-        }
+            Err(vk::Result::ERROR_DEVICE_LOST) => GpuError::DeviceLost(format!("waiting for {what}")),
+            Err(result) => GpuError::Vk { call, result },
+        };
+        self.failed.store(true, Ordering::SeqCst);
+        Err(err)
+    }
+
+    /// Wait for fences with the timeout; a timeout or loss is an error, never a hang.
+    pub fn wait_fences(&self, fences: &[vk::Fence], what: &str) -> GpuResult<()> {
+        let r = unsafe { self.device.wait_for_fences(fences, true, self.gpu_timeout().as_nanos() as u64) };
+        self.wait_result(r, "vkWaitForFences", what)
     }
 
     /// Record and run a one-off command buffer on the graphics queue and wait for it
@@ -705,7 +771,13 @@ impl Context {
 
 impl Drop for Context {
     fn drop(&mut self) {
+        if self.has_failed() {
+            // The GPU may still run (or never finish) work that uses this device: waiting could
+            // hang and destroying it is undefined. Leave it to the process's exit.
+            return;
+        }
         unsafe {
+            // Every owner waited (bounded) for its own work before dropping, so this returns at once.
             let _ = self.device.device_wait_idle();
             ManuallyDrop::drop(&mut self.allocator);
             self.device.destroy_device(None);

@@ -29,14 +29,18 @@ pub enum GpuError {
     #[error("{call} failed: {result}")]
     Vk { call: &'static str, result: vk::Result },
 
-    #[error("GPU memory allocation for {name:?} failed: {source}")]
+    #[error("GPU memory allocation of {} MiB for {name:?} failed: {source}", *bytes as f64 / 1048576.0)]
     Alloc {
         name: String,
+        bytes: u64,
         #[source]
         source: gpu_allocator::AllocationError,
     },
 
-    #[error("timed out after {seconds} s waiting for {what}: the GPU is hung or the device was lost")]
+    #[error(
+        "timed out after {seconds} s waiting for {what}: the GPU is hung, the device was lost, or the work is \
+         too large for this device (DVSGI_GPU_TIMEOUT=SECONDS sets the limit)"
+    )]
     Timeout { what: String, seconds: f64 },
 
     #[error("the device was lost while {0}")]

@@ -34,6 +34,7 @@ impl Buffer {
             Some(f) => info.sharing_mode(vk::SharingMode::CONCURRENT).queue_family_indices(f),
             None => info.sharing_mode(vk::SharingMode::EXCLUSIVE),
         };
+        check_allocation(ctx, name, size)?;
         let raw = unsafe { d.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         let req = unsafe { d.get_buffer_memory_requirements(raw) };
         let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
@@ -47,7 +48,7 @@ impl Buffer {
             Ok(a) => a,
             Err(source) => {
                 unsafe { d.destroy_buffer(raw, None) };
-                return Err(GpuError::Alloc { name: name.to_string(), source });
+                return Err(GpuError::Alloc { name: name.to_string(), bytes: req.size, source });
             }
         };
         if let Err(e) = unsafe { d.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) } {
@@ -95,8 +96,29 @@ impl Buffer {
     }
 }
 
+/// Refuse, naming the limit, an allocation larger than the device's largest allocation or heap
+/// (the driver would fail it with a bare out-of-memory, or the validation layer flag it).
+fn check_allocation(ctx: &Context, name: &str, bytes: u64) -> GpuResult<()> {
+    let i = &ctx.info;
+    let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+    for (limit, what) in [(i.max_allocation, "maxMemoryAllocationSize"), (i.device_local_heap, "largest memory heap")] {
+        if limit > 0 && bytes > limit {
+            return Err(GpuError::Limit(format!(
+                "{name:?} needs {:.1} MiB, more than {}'s {what} ({:.1} MiB)",
+                mib(bytes),
+                i.name,
+                mib(limit)
+            )));
+        }
+    }
+    Ok(())
+}
+
 impl Drop for Buffer {
     fn drop(&mut self) {
+        if self.ctx.has_failed() {
+            return; // the GPU may still use it (Context::has_failed)
+        }
         unsafe { self.ctx.device.destroy_buffer(self.raw, None) };
         if let Some(a) = self.allocation.take() {
             let _ = self.ctx.allocator().free(a);
@@ -225,6 +247,10 @@ impl Image {
         }
         .vk("vkCreateImage")?;
         let req = unsafe { d.get_image_memory_requirements(raw) };
+        if let Err(e) = check_allocation(ctx, name, req.size) {
+            unsafe { d.destroy_image(raw, None) };
+            return Err(e);
+        }
         let allocation = match ctx.allocator().allocate(&AllocationCreateDesc {
             name,
             requirements: req,
@@ -235,7 +261,7 @@ impl Image {
             Ok(a) => a,
             Err(source) => {
                 unsafe { d.destroy_image(raw, None) };
-                return Err(GpuError::Alloc { name: name.to_string(), source });
+                return Err(GpuError::Alloc { name: name.to_string(), bytes: req.size, source });
             }
         };
         let mut img = Image {
@@ -326,6 +352,9 @@ impl Image {
 
 impl Drop for Image {
     fn drop(&mut self) {
+        if self.ctx.has_failed() {
+            return; // the GPU may still use it (Context::has_failed)
+        }
         unsafe {
             for v in self.layer_views.drain(..).chain(self.level_views.drain(..)) {
                 self.ctx.device.destroy_image_view(v, None);
@@ -357,6 +386,9 @@ impl Sampler {
 
 impl Drop for Sampler {
     fn drop(&mut self) {
+        if self.ctx.has_failed() {
+            return; // the GPU may still use it (Context::has_failed)
+        }
         unsafe { self.ctx.device.destroy_sampler(self.raw, None) };
     }
 }

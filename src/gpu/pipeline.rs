@@ -155,6 +155,9 @@ impl DescriptorSet {
 
 impl Drop for DescriptorSet {
     fn drop(&mut self) {
+        if self.ctx.has_failed() {
+            return; // the GPU may still use it (Context::has_failed)
+        }
         unsafe {
             self.ctx.device.destroy_descriptor_pool(self.pool, None);
             self.ctx.device.destroy_descriptor_set_layout(self.layout, None);
@@ -171,6 +174,9 @@ pub struct Pipeline {
 
 impl Drop for Pipeline {
     fn drop(&mut self) {
+        if self.ctx.has_failed() {
+            return; // the GPU may still use it (Context::has_failed)
+        }
         unsafe {
             self.ctx.device.destroy_pipeline(self.raw, None);
             self.ctx.device.destroy_pipeline_layout(self.layout, None);

@@ -19,7 +19,7 @@ use super::scene_gpu::SceneGpu;
 use super::voxel::VoxelVolumes;
 use super::FrameBuffers;
 use crate::gpu::{Context, GpuResult, Image, ImageDesc};
-use crate::scene::{DirectShadows, GiMode, Scene, View};
+use crate::scene::{DirectShadows, GiMode, Scene, View, VoxelOcclusion};
 use ash::vk;
 use std::sync::Arc;
 
@@ -76,6 +76,8 @@ pub struct FramePasses {
     pub tonemap: TonemapPass,
     /// Created on the first frame whose output is read back (not for benchmarks).
     pub readback: Option<ReadbackPasses>,
+    /// The frame's 2D targets: G-buffer, shadow maps (or their placeholder), radiance, display.
+    pub targets: Vec<Arc<Image>>,
 }
 
 /// What differs from frame to frame.
@@ -118,7 +120,9 @@ impl FramePasses {
                 atlas_size,
                 atlas_size,
                 atlas_layers,
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+                    | vk::ImageUsageFlags::SAMPLED
+                    | vk::ImageUsageFlags::TRANSFER_SRC,
             ),
         )?);
         let image2d = |name: &str, format| {
@@ -241,6 +245,16 @@ impl FramePasses {
             shading,
             tonemap: TonemapPass::new(ctx, frame, &radiance, &display)?,
             readback: None,
+            targets: vec![
+                gbuffer.depth.clone(),
+                gbuffer.albedo.clone(),
+                gbuffer.normal.clone(),
+                gbuffer.specular.clone(),
+                gbuffer.emission.clone(),
+                atlas.clone(),
+                radiance.clone(),
+                display.clone(),
+            ],
         })
     }
 
@@ -341,6 +355,21 @@ impl FramePasses {
 }
 
 /// Direct light is shadowed by cones (`gi.shadows = "cone"`, cones traced per pixel).
+/// The shadow-map views a frame renders: every shadowed light's views where something samples
+/// them (direct light, unless cones shadow every shadowed light; or voxel lighting with
+/// shadow-map occlusion), else 0.
+pub fn shadow_map_views(scene: &Scene) -> u32 {
+    let s = &scene.settings;
+    let voxel_lighting = s.gi.mode == GiMode::Vct || matches!(s.view, View::VoxelRadiance | View::VoxelMip);
+    let direct_maps = !cone_shadows(scene) || scene.lights.len() > 4;
+    let voxel_maps = voxel_lighting && s.gi.occlusion == VoxelOcclusion::ShadowMap;
+    if direct_maps || voxel_maps {
+        crate::render::lights::shadow_view_count(scene)
+    } else {
+        0
+    }
+}
+
 pub fn cone_shadows(scene: &Scene) -> bool {
     let s = &scene.settings;
     s.gi.mode == GiMode::Vct

@@ -27,6 +27,36 @@ pub const LIGHT_DIRECTIONAL: f32 = 0.0;
 pub const LIGHT_POINT: f32 = 1.0;
 pub const LIGHT_SPOT: f32 = 2.0;
 
+/// The power of two by which every 16-bit radiance target (G-buffer emission, voxel radiance,
+/// bounce and directional volumes, cone-tracing targets) holds radiance, so that the scene's
+/// typical radiance sits near 1, in the middle of the half-float range (6e-5 .. 65504), whatever
+/// the units: a 1e-6 W/sr light neither underflows nor does a 1e6 W/sr one overflow. Typical
+/// radiance is the largest of: the brightest emission, a directional light's E/pi, and a point
+/// or spot light's I/pi at 5% of the scene's extent. Exact (a power of two), so scaling and
+/// unscaling round nothing; 1 for a scene without light.
+pub fn radiance_scale(scene: &Scene) -> f32 {
+    let t = scene.settings.time;
+    let bounds = scene.bounds.unwrap_or_else(|| scene.world_bounds(t));
+    let extent = if bounds.is_empty() { 0.0 } else { bounds.extent().max_element() };
+    let near = if extent.is_finite() && extent > 0.0 { 0.05 * extent } else { 1.0 };
+    let typical = scene.lights.iter().fold(
+        scene.materials.iter().map(|m| m.emission.max_element()).fold(0.0f32, f32::max),
+        |acc, l| {
+            let l = match l.at_time(t) {
+                LightKind::Directional { irradiance, .. } => irradiance.max_element() / std::f32::consts::PI,
+                LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => {
+                    intensity.max_element() / (std::f32::consts::PI * near * near)
+                }
+            };
+            acc.max(l)
+        },
+    );
+    if !(typical.is_finite() && typical > 0.0) {
+        return 1.0;
+    }
+    2f32.powi((-typical.log2().round() as i32).clamp(-100, 100))
+}
+
 /// Number of shadow views each light of the scene needs (independent of time).
 pub fn shadow_view_count(scene: &Scene) -> u32 {
     scene
@@ -131,4 +161,35 @@ pub fn build(
         lights.push(g);
     }
     (lights, views)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene(lights: Vec<LightKind>) -> Scene {
+        crate::render::test_scene(lights)
+    }
+
+    fn point(i: f32) -> LightKind {
+        LightKind::Point { position: Vec3::ONE, intensity: Vec3::splat(i) }
+    }
+
+    #[test]
+    fn radiance_scale_is_a_power_of_two_bringing_typical_radiance_near_one() {
+        assert_eq!(radiance_scale(&scene(vec![])), 1.0, "no light");
+        assert_eq!(radiance_scale(&scene(vec![point(0.0)])), 1.0, "black light");
+        for i in [1e-20f32, 1e-6, 1.2, 1e6, 1e20] {
+            let s = radiance_scale(&scene(vec![point(i)]));
+            assert_eq!(s.log2().fract(), 0.0, "{s} is a power of two");
+            // extent 2 -> evaluated at 0.1: typical radiance I / (pi 0.01).
+            let typical = i / (std::f32::consts::PI * 0.01);
+            assert!((0.7..1.42).contains(&(typical * s)), "I = {i}: scale {s}");
+        }
+        // Beyond 2^+-100 the scale stops (radiance times it stays far inside f32).
+        assert_eq!(radiance_scale(&scene(vec![point(3e35)])), 2f32.powi(-100));
+        let sun = LightKind::Directional { direction: -Vec3::Y, irradiance: Vec3::new(1000.0, 500.0, 0.0) };
+        let s = radiance_scale(&scene(vec![sun, point(1e-3)]));
+        assert!((0.7..1.42).contains(&(1000.0 / std::f32::consts::PI * s)), "brightest light sets it: {s}");
+    }
 }

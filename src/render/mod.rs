@@ -1,6 +1,7 @@
 //! The renderer: scene upload, per-frame data, and frame submission. What a frame runs is in
 //! [`frame`]; how barriers are derived is in [`graph`].
 
+pub mod budget;
 pub mod cones;
 pub mod frame;
 pub mod graph;
@@ -11,7 +12,7 @@ pub mod schedule;
 pub mod voxel;
 
 use crate::gpu::{Access, Buffer, Context, GpuError, GpuResult};
-use crate::scene::{GiMode, Scene, ToneMap, View, VoxelOcclusion};
+use crate::scene::{Scene, ToneMap};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use frame::{FramePasses, FrameState};
@@ -33,6 +34,8 @@ pub struct FrameUniforms {
     pub camera_pos: [f32; 4],
     pub counts: [u32; 4],
     pub shadow: [f32; 4],
+    /// x: 16-bit radiance targets hold radiance * x (`lights::radiance_scale`); y = 1/x.
+    pub radiance_scale: [f32; 4],
 }
 
 /// Per-frame data from the host, shared by the passes. The buffers are device-local and
@@ -118,6 +121,8 @@ pub struct Renderer {
     lights_changed: bool,
     /// Passes of the last rendered frame, in order.
     last_passes: Vec<String>,
+    /// `lights::radiance_scale` of the scene.
+    radiance_scale: f32,
 }
 
 impl Renderer {
@@ -144,8 +149,11 @@ impl Renderer {
                 s.shadow_map_size
             )));
         }
-        let scene_gpu = Arc::new(SceneGpu::new(ctx, &scene)?);
         let shadow_views = lights::shadow_view_count(&scene);
+        let map_views = frame::shadow_map_views(&scene);
+        // Refuse what cannot fit before allocating anything.
+        budget::Estimate::of(&scene).check(ctx, &scene)?;
+        let scene_gpu = Arc::new(SceneGpu::new(ctx, &scene)?);
         let frame_buffers = FrameBuffers {
             uniforms: Buffer::new(
                 ctx,
@@ -172,14 +180,9 @@ impl Renderer {
             )?
             .into(),
         };
-        // Shadow maps only where something samples them: direct light (unless cones shadow
-        // every shadowed light) or voxel lighting with shadow-map occlusion.
-        let voxel_lighting = s.gi.mode == GiMode::Vct || matches!(s.view, View::VoxelRadiance | View::VoxelMip);
-        let direct_maps = !frame::cone_shadows(&scene) || scene.lights.len() > 4;
-        let voxel_maps = voxel_lighting && s.gi.occlusion == VoxelOcclusion::ShadowMap;
-        let map_views = if direct_maps || voxel_maps { shadow_views } else { 0 };
         let passes = FramePasses::new(ctx, &scene, &scene_gpu, &frame_buffers, map_views)?;
         let scheduler = Scheduler::new(ctx, options.mode, options.frames_in_flight)?;
+        let radiance_scale = lights::radiance_scale(&scene);
         Ok(Renderer {
             ctx: ctx.clone(),
             scene,
@@ -194,6 +197,7 @@ impl Renderer {
             last_lights: Vec::new(),
             lights_changed: true,
             last_passes: Vec::new(),
+            radiance_scale,
         })
     }
 
@@ -238,6 +242,12 @@ impl Renderer {
     /// The voxel volumes and cone-tracing targets this scene created (for `info` and tests).
     pub fn images(&self) -> Vec<Arc<crate::gpu::Image>> {
         self.passes.gi_images().into_iter().cloned().collect()
+    }
+
+    /// Every image of the frame: the 2D targets (G-buffer, shadow maps, radiance, display),
+    /// then the voxel volumes and cone-tracing targets (for robustness tests).
+    pub fn all_images(&self) -> Vec<Arc<crate::gpu::Image>> {
+        self.passes.targets.iter().cloned().chain(self.images()).collect()
     }
 
     /// Copy an image of this renderer to the host (waits; for tests and debugging).
@@ -308,6 +318,7 @@ impl Renderer {
             camera_pos: [cam.position.x, cam.position.y, cam.position.z, t],
             counts: [self.width, self.height, self.scene.lights.len() as u32, tonemap],
             shadow: [s.shadow_filter_radius, s.shadow_normal_bias, s.shadow_map_size as f32, 2f32.powf(s.exposure)],
+            radiance_scale: [self.radiance_scale, 1.0 / self.radiance_scale, 0.0, 0.0],
         };
         let upload = &self.passes.upload;
         upload.set(0, bytemuck::bytes_of(&u));
@@ -369,8 +380,32 @@ impl Renderer {
 impl Drop for Renderer {
     fn drop(&mut self) {
         // Frames in flight still use the passes' resources, which drop before the scheduler.
-        unsafe {
-            let _ = self.ctx.device.device_wait_idle();
+        // The wait is bounded; after a timeout or a lost device the resources are leaked
+        // (`Context::has_failed`) rather than freed under the GPU.
+        if !self.ctx.has_failed() {
+            let _ = self.scheduler.wait_idle();
         }
+    }
+}
+
+/// A scene without geometry in the box [0, 2]^3 with the given lights (unit tests).
+#[cfg(test)]
+pub(crate) fn test_scene(lights: Vec<crate::scene::LightKind>) -> Scene {
+    use crate::scene::{Aabb, Camera, Light, Motion, RenderSettings};
+    use glam::Vec3;
+    Scene {
+        path: std::path::PathBuf::from("test"),
+        name: "test".into(),
+        meshes: vec![],
+        objects: vec![],
+        materials: vec![],
+        textures: vec![],
+        camera: Camera { position: Vec3::Z, target: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 45.0, near: 0.1, far: 10.0 },
+        lights: lights
+            .into_iter()
+            .map(|kind| Light { name: "l".into(), kind, cast_shadows: false, motion: Motion::None })
+            .collect(),
+        settings: RenderSettings::default(),
+        bounds: Some(Aabb { min: Vec3::ZERO, max: Vec3::splat(2.0) }),
     }
 }

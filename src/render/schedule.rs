@@ -15,8 +15,7 @@
 //! in the serial profile; never between the submits of a frame.
 
 use super::graph::{record_barriers, Pass, QueueKind, StateTracker, Transition};
-use crate::gpu::context::GPU_TIMEOUT;
-use crate::gpu::{Context, GpuError, GpuResult, VkContext};
+use crate::gpu::{Context, GpuResult, VkContext};
 use ash::vk;
 use std::fmt;
 use std::str::FromStr;
@@ -600,14 +599,8 @@ impl Scheduler {
             return Ok(());
         }
         let info = vk::SemaphoreWaitInfo::default().semaphores(&sems).values(&vals);
-        match unsafe { self.ctx.device.wait_semaphores(&info, GPU_TIMEOUT.as_nanos() as u64) } {
-            Ok(()) => Ok(()),
-            Err(vk::Result::TIMEOUT) => {
-                Err(GpuError::Timeout { what: what.to_string(), seconds: GPU_TIMEOUT.as_secs_f64() })
-            }
-            Err(vk::Result::ERROR_DEVICE_LOST) => Err(GpuError::DeviceLost(format!("waiting for {what}"))),
-            Err(result) => Err(GpuError::Vk { call: "vkWaitSemaphores", result }),
-        }
+        let r = unsafe { self.ctx.device.wait_semaphores(&info, self.ctx.gpu_timeout().as_nanos() as u64) };
+        self.ctx.wait_result(r, "vkWaitSemaphores", what)
     }
 
     /// Read the timestamps of the finished frame in `slot`, if it has one not read yet.
@@ -682,9 +675,12 @@ fn calibration(ctx: &Context) -> Option<ash::ext::calibrated_timestamps::Device>
 
 impl Drop for Scheduler {
     fn drop(&mut self) {
+        // Bounded wait for this scheduler's own work; after a timeout or a lost device, leak.
+        if self.ctx.has_failed() || self.wait_values(self.timeline_values(), "the frames in flight").is_err() {
+            return;
+        }
         let d = &self.ctx.device;
         unsafe {
-            let _ = d.device_wait_idle();
             for slot in &self.slots {
                 for s in &slot.streams {
                     d.destroy_command_pool(s.pool, None);

@@ -108,6 +108,9 @@ pub struct VoxelVolumes {
     pub flags_placeholder: Option<Arc<Image>>,
     /// Emitted radiance that maps to 255 in the emission volume.
     pub emission_scale: f32,
+    /// The radiance, bounce and directional volumes hold radiance times this
+    /// (`lights::radiance_scale`).
+    pub radiance_scale: f32,
 }
 
 impl VoxelVolumes {
@@ -165,13 +168,14 @@ impl VoxelVolumes {
                 .max_lod(mip_levels as f32),
         )?;
         let emission_scale = scene.materials.iter().map(|m| m.emission.max_element()).fold(0.0f32, f32::max).max(1e-6);
+        let radiance_scale = crate::render::lights::radiance_scale(scene);
         let grid_buffer = Buffer::uniform(
             ctx,
             "voxel grid",
             &GpuVoxelGrid {
                 origin: [grid.origin.x, grid.origin.y, grid.origin.z, grid.voxel_size],
                 dims: [res, 0, 0, 0],
-                params: [emission_scale, 0.0, 0.0, 0.0],
+                params: [emission_scale, radiance_scale, 1.0 / radiance_scale, 0.0],
             },
         )?;
         Ok(VoxelVolumes {
@@ -195,6 +199,7 @@ impl VoxelVolumes {
                 })
                 .transpose()?,
             emission_scale,
+            radiance_scale,
         })
     }
 

@@ -70,6 +70,24 @@ pub enum SceneError {
     Texture { path: PathBuf, message: String },
 }
 
+impl SceneError {
+    /// The file the error is about (the scene file for `--set` and asset errors), if any.
+    /// Its `Display` text always names this path.
+    pub fn path(&self) -> Option<&std::path::Path> {
+        match self {
+            SceneError::Io { path, .. }
+            | SceneError::Toml { path, .. }
+            | SceneError::UnknownKey { path, .. }
+            | SceneError::InvalidValue { path, .. }
+            | SceneError::Obj { path, .. }
+            | SceneError::Mtl { path, .. }
+            | SceneError::Texture { path, .. } => Some(path),
+            SceneError::AssetNotFound { scene_path, .. } => Some(scene_path),
+            SceneError::BadOverride { .. } => None,
+        }
+    }
+}
+
 fn list(v: &[String]) -> String {
     if v.is_empty() {
         "(none)".to_owned()

@@ -699,6 +699,12 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
     if view_dir.length_squared() == 0.0 {
         return Err(ctx.invalid("camera.target", "camera position and target are the same point"));
     }
+    if !view_dir.length().is_finite() {
+        return Err(ctx.invalid(
+            "camera.target",
+            format!("the distance from position {} to target {} overflows", camera.position, camera.target),
+        ));
+    }
     if view_dir.normalize().cross(camera.up.normalize_or_zero()).length_squared() < 1e-8 {
         return Err(ctx.invalid("camera.up", format!("up {} is zero or parallel to the view direction", camera.up)));
     }
@@ -712,6 +718,14 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
     }
     if !(16..=8192).contains(&r.shadow_map_size) {
         return Err(ctx.invalid("render.shadow_map_size", format!("{} is not in 16..=8192", r.shadow_map_size)));
+    }
+    // The camera matrices the renderer builds must be finite (huge coordinates or an extreme
+    // near/far can overflow even when every input is finite).
+    let aspect = r.width as f32 / r.height as f32;
+    if !camera.view().is_finite() || !camera.projection(aspect).is_finite() {
+        return Err(
+            ctx.invalid("camera", "the view or projection matrix is not finite (coordinates or near/far too extreme)")
+        );
     }
     let settings = RenderSettings {
         width: r.width,
@@ -728,6 +742,9 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         gi: file.gi.clone(),
     };
     settings.gi.validate().map_err(|(key, message)| ctx.invalid(format!("gi.{key}"), message))?;
+    if !(-64.0..=64.0).contains(&settings.exposure) {
+        return Err(ctx.invalid("render.exposure", format!("{} is not in -64..=64 (EV stops)", settings.exposure)));
+    }
     if !(0.0..=16.0).contains(&settings.view_lod) {
         return Err(ctx.invalid("render.view_lod", format!("{} is not in 0..=16", settings.view_lod)));
     }
@@ -915,7 +932,7 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         if mesh_ids.is_empty() {
             log::warn!("{}: {key}: {} contains no triangles", path.display(), obj_path.display());
         }
-        objects.push(Object {
+        let object = Object {
             name: match &o.name {
                 Some(n) if !n.is_empty() => n.clone(),
                 _ => obj_path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default(),
@@ -924,13 +941,46 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
             transform: Mat4::from_scale_rotation_translation(scale, euler_quat(rotate), translate),
             dynamic: o.dynamic,
             motion,
-        });
+        };
+        // Finite inputs can still overflow once transformed (a huge scale, a fast motion at
+        // a late render.time): the renderer must never see non-finite world positions.
+        let t = settings.time;
+        let m = object.model_matrix(t);
+        let finite = m.is_finite()
+            && object.meshes.iter().all(|&k| {
+                let b = meshes[k as usize].bounds.transformed(&m);
+                b.min.is_finite() && b.max.is_finite() && b.extent().is_finite()
+            });
+        if !finite {
+            return Err(ctx.invalid(
+                key,
+                format!(
+                    "{} transformed to world space at time {t} is not finite (scale, translation or motion too large)",
+                    obj_path.display()
+                ),
+            ));
+        }
+        objects.push(object);
     }
 
     // [[lights]]
     let mut lights = Vec::with_capacity(file.lights.len());
     for (i, l) in file.lights.iter().enumerate() {
-        lights.push(light(&ctx, i, l)?);
+        let l = light(&ctx, i, l)?;
+        let finite = match l.at_time(settings.time) {
+            LightKind::Point { position, .. } => position.is_finite(),
+            LightKind::Directional { direction, .. } => direction.is_finite() && direction != Vec3::ZERO,
+            LightKind::Spot { position, direction, .. } => {
+                position.is_finite() && direction.is_finite() && direction != Vec3::ZERO
+            }
+        };
+        if !finite {
+            return Err(ctx.invalid(
+                format!("lights.{i}"),
+                format!("the light's position or direction at time {} is not finite (motion too large)", settings.time),
+            ));
+        }
+        lights.push(l);
     }
 
     Ok(Scene { path: path.to_path_buf(), name, meshes, objects, materials, textures, camera, lights, settings, bounds })

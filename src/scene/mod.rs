@@ -9,6 +9,8 @@ mod file;
 mod obj;
 mod preset;
 pub use preset::Preset;
+mod check;
+mod text;
 
 use std::path::{Path, PathBuf};
 
@@ -36,7 +38,7 @@ impl LoadOptions {
 
 /// Loads and validates a scene file and everything it references.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io { path: path.to_path_buf(), source })?;
+    let text = text::read(path, "a TOML scene file", |p, message| SceneError::Toml { path: p.to_path_buf(), message })?;
     let parsed = file::parse(path, &text, &opts.overrides)?;
     file::build(path, parsed, opts)
 }

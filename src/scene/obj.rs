@@ -7,7 +7,7 @@
 
 use super::error::SceneError;
 use super::types::{Aabb, Texture};
-use glam::{Vec2, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 use std::cell::Cell;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -104,19 +104,40 @@ fn check_index(tok: &str, count: usize, what: &str) -> Result<(), String> {
 struct Prescan {
     mtllibs: Vec<(usize, String)>,
     usemtl: BTreeSet<String>,
-    /// `l` lines, which tobj would turn into triangles; they are blanked out.
-    line_elements: Vec<usize>,
+    /// The text handed to tobj: one line per input line (so line numbers stay the same),
+    /// holding only the statements tobj should interpret, in a canonical form (single
+    /// spaces, no comments, no vertex colours); everything else is an empty line.
+    normalized: String,
 }
 
-/// Validates every line `tobj` would interpret, with line numbers.
+/// The values of a statement up to an inline comment.
+fn values<'a>(args: &[&'a str]) -> Vec<&'a str> {
+    args.iter().copied().take_while(|a| !a.starts_with('#')).collect()
+}
+
+/// Validates every line `tobj` would interpret, with line numbers, and builds the canonical
+/// text for tobj (see [`Prescan::normalized`]).
 fn prescan(path: &Path, text: &str) -> Result<Prescan, SceneError> {
     let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
-    let mut out = Prescan { mtllibs: Vec::new(), usemtl: BTreeSet::new(), line_elements: Vec::new() };
+    let mut out =
+        Prescan { mtllibs: Vec::new(), usemtl: BTreeSet::new(), normalized: String::with_capacity(text.len()) };
     for (i, raw) in text.lines().enumerate() {
         let ln = i + 1;
+        if i > 0 {
+            out.normalized.push('\n');
+        }
         let mut words = raw.split_whitespace();
         let Some(kw) = words.next() else { continue };
         let args: Vec<&str> = words.collect();
+        // The rest of the line after the keyword (names may contain spaces).
+        let rest = raw.trim_start()[kw.len()..].trim();
+        let emit = |out: &mut Prescan, vals: &[&str]| {
+            out.normalized.push_str(kw);
+            for v in vals {
+                out.normalized.push(' ');
+                out.normalized.push_str(v);
+            }
+        };
         match kw {
             "v" => {
                 if !matches!(args.len(), 3 | 4 | 6) {
@@ -143,24 +164,35 @@ fn prescan(path: &Path, text: &str) -> Result<Prescan, SceneError> {
                         return Err(obj_err(path, ln, "vertex position: invalid w (zero or too small)"));
                     }
                 }
+                // Vertex colours are not used (and tobj refuses files where only some
+                // vertices have them).
+                emit(&mut out, if args.len() == 6 { &args[..3] } else { &args });
                 nv += 1;
             }
             "vt" => {
-                if args.len() < 2 {
-                    return Err(obj_err(path, ln, "texture coordinate needs at least 2 values (u v)"));
+                let vals = values(&args);
+                if !(2..=3).contains(&vals.len()) {
+                    return Err(obj_err(
+                        path,
+                        ln,
+                        format!("texture coordinate needs 2 values (u v, optionally w), found {}", vals.len()),
+                    ));
                 }
-                for a in args.iter().take(2) {
+                for a in &vals {
                     parse_finite(a).map_err(|m| obj_err(path, ln, format!("texture coordinate: {m}")))?;
                 }
+                emit(&mut out, &vals[..2]);
                 nvt += 1;
             }
             "vn" => {
-                if args.len() < 3 {
-                    return Err(obj_err(path, ln, "normal needs 3 values (x y z)"));
+                let vals = values(&args);
+                if vals.len() != 3 {
+                    return Err(obj_err(path, ln, format!("normal needs 3 values (x y z), found {}", vals.len())));
                 }
-                for a in args.iter().take(3) {
+                for a in &vals {
                     parse_finite(a).map_err(|m| obj_err(path, ln, format!("normal: {m}")))?;
                 }
+                emit(&mut out, &vals);
                 nvn += 1;
             }
             "f" => {
@@ -188,22 +220,25 @@ fn prescan(path: &Path, text: &str) -> Result<Prescan, SceneError> {
                         check_index(p, count, what).map_err(|m| obj_err(path, ln, m))?;
                     }
                 }
+                emit(&mut out, &args);
             }
-            "l" => out.line_elements.push(i),
+            "o" | "g" => emit(&mut out, &[rest]),
             "mtllib" => {
-                let rest = raw.trim_start()[kw.len()..].trim();
                 if rest.is_empty() {
                     return Err(obj_err(path, ln, "mtllib without a file name"));
                 }
                 out.mtllibs.push((ln, rest.to_owned()));
+                emit(&mut out, &[rest]);
             }
             "usemtl" => {
-                let rest = raw.trim_start()[kw.len()..].trim();
                 if rest.is_empty() {
                     return Err(obj_err(path, ln, "usemtl without a material name"));
                 }
                 out.usemtl.insert(rest.to_owned());
+                emit(&mut out, &[rest]);
             }
+            // `l` (polylines, which tobj would triangulate), `p`, `s`, comments and anything
+            // unknown are left out.
             _ => {}
         }
     }
@@ -232,14 +267,6 @@ fn join_paths(v: &[PathBuf]) -> String {
     v.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
 }
 
-fn read_text(path: &Path) -> Result<String, SceneError> {
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io { path: path.to_path_buf(), source })?;
-    Ok(match String::from_utf8(bytes) {
-        Ok(s) => s,
-        Err(e) => String::from_utf8_lossy(e.as_bytes()).into_owned(),
-    })
-}
-
 fn parse_color(path: &Path, ln: usize, key: &str, args: &[&str]) -> Result<Vec3, SceneError> {
     // Inline comments ("Kd 1 0 0 # red") are allowed.
     let args: Vec<&str> = args.iter().copied().take_while(|a| !a.starts_with('#')).collect();
@@ -266,6 +293,10 @@ fn parse_color(path: &Path, ln: usize, key: &str, args: &[&str]) -> Result<Vec3,
         return Err(mtl_err(path, ln, format!("{key} must not be negative")));
     }
     Ok(c)
+}
+
+fn read_mtl(path: &Path) -> Result<String, SceneError> {
+    super::text::read(path, "an MTL file", |p, message| SceneError::Mtl { path: p.to_path_buf(), message })
 }
 
 /// Parses an MTL file. Unknown statements are ignored; colours must be finite and >= 0.
@@ -324,13 +355,22 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<MtlMaterial>, Sce
                         cur.texture_ref = format!("{fname} line {ln}");
                     }
                     None => {
-                        return Err(SceneError::Texture {
-                            path: tried.first().cloned().unwrap_or_else(|| dir.join(name)),
-                            message: format!(
-                                "texture not found (referenced by map_Kd `{name}` in {fname} line {ln}; looked at {})",
-                                join_paths(&tried)
-                            ),
-                        })
+                        if let Some(d) = tried.iter().find(|p| p.exists()) {
+                            return Err(mtl_err(
+                                path,
+                                ln,
+                                format!("map_Kd `{name}`: {} exists but is not a file", d.display()),
+                            ));
+                        }
+                        // A missing texture is common in downloaded models: warn and fall
+                        // back to the untextured Kd colour.
+                        log::warn!(
+                            "{fname}: line {ln}: texture `{name}` (map_Kd of material `{}`) not found; looked at {}; \
+                             using the material's untextured Kd colour",
+                            cur.name,
+                            join_paths(&tried)
+                        );
+                        cur.albedo_texture = None;
                     }
                 }
             }
@@ -342,7 +382,7 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<MtlMaterial>, Sce
 
 /// Loads an OBJ file with its MTL libraries.
 pub(crate) fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
-    let text = read_text(path)?;
+    let text = super::text::read(path, "an OBJ file", |p, message| SceneError::Obj { path: p.to_path_buf(), message })?;
     let scan = prescan(path, &text)?;
     let dir = path.parent().unwrap_or(Path::new("."));
 
@@ -361,7 +401,7 @@ pub(crate) fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
                 ),
             });
         };
-        let mats = parse_mtl(&mtl_path, &read_text(&mtl_path)?)?;
+        let mats = parse_mtl(&mtl_path, &read_mtl(&mtl_path)?)?;
         let map = mats.iter().enumerate().map(|(k, m)| (m.name.clone(), k)).collect();
         let tmats = mats.iter().map(|m| tobj::Material { name: m.name.clone(), ..Default::default() }).collect();
         libs.push(Ok((tmats, map)));
@@ -385,13 +425,7 @@ pub(crate) fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
         }
     }
 
-    // Blank out `l` elements (tobj would triangulate polylines); keeps the line numbering.
-    let text = if scan.line_elements.is_empty() {
-        text
-    } else {
-        let drop: BTreeSet<usize> = scan.line_elements.iter().copied().collect();
-        text.lines().enumerate().map(|(i, l)| if drop.contains(&i) { "" } else { l }).collect::<Vec<_>>().join("\n")
-    };
+    let text = scan.normalized;
 
     let next = Cell::new(0usize);
     // `..Default::default()` covers fields that exist only with some tobj features.
@@ -474,14 +508,27 @@ pub(crate) fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
     Ok(ObjData { groups, materials })
 }
 
-fn face_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
+/// Area-weighted face normals, in f64 so that edges of huge (but finite) coordinates do not
+/// overflow and tiny triangles do not underflow.
+fn face_normals(positions: &[Vec3], indices: &[u32]) -> Vec<DVec3> {
     indices
         .chunks_exact(3)
         .map(|t| {
-            let p = |k: usize| positions.get(t[k] as usize).copied().unwrap_or(Vec3::ZERO);
+            let p = |k: usize| positions.get(t[k] as usize).copied().unwrap_or(Vec3::ZERO).as_dvec3();
             (p(1) - p(0)).cross(p(2) - p(0))
         })
         .collect()
+}
+
+/// `v` scaled to unit length (as f32), or `None` for a zero or non-finite vector.
+fn unit(v: DVec3) -> Option<Vec3> {
+    let l = v.length();
+    if l.is_finite() && l > 0.0 {
+        let u = (v / l).as_vec3();
+        u.is_finite().then_some(u)
+    } else {
+        None
+    }
 }
 
 /// Vertex -> adjacent triangles, as (offsets, triangle list).
@@ -507,7 +554,9 @@ fn adjacency(n: usize, indices: &[u32]) -> (Vec<usize>, Vec<u32>) {
 }
 
 /// Normalises given normals (repairing zero/non-finite ones) or generates smooth normals with
-/// a crease angle, splitting vertices where a vertex needs more than one normal.
+/// a crease angle, splitting vertices where a vertex needs more than one normal. Every normal
+/// that comes out is finite and of unit length: a zero normal is replaced by the (area
+/// weighted) normal of the adjacent faces, and where those are degenerate too by +Y.
 fn finish_normals(
     positions: Vec<Vec3>,
     normals: Option<Vec<Vec3>>,
@@ -517,40 +566,20 @@ fn finish_normals(
     let n = positions.len();
     let fnorm = face_normals(&positions, &indices);
     let (start, tris) = adjacency(n, &indices);
-    let adjacent_sum = |v: usize| -> Vec3 {
+    let adjacent_sum = |v: usize| -> DVec3 {
         let (a, b) = (start[v], start[v + 1]);
-        tris[a..b].iter().map(|&t| fnorm[t as usize]).sum::<Vec3>()
+        tris[a..b].iter().map(|&t| fnorm[t as usize]).sum::<DVec3>()
     };
 
     if let Some(mut normals) = normals {
         for (v, nrm) in normals.iter_mut().enumerate() {
-            let u = if nrm.is_finite() { nrm.normalize_or_zero() } else { Vec3::ZERO };
-            *nrm = if u != Vec3::ZERO {
-                u
-            } else {
-                let s = adjacent_sum(v).normalize_or_zero();
-                if s != Vec3::ZERO && s.is_finite() {
-                    s
-                } else {
-                    Vec3::Y
-                }
-            };
+            *nrm = unit(nrm.as_dvec3()).or_else(|| unit(adjacent_sum(v))).unwrap_or(Vec3::Y);
         }
         return (positions, normals, uvs, indices);
     }
 
     let cos_crease = CREASE_ANGLE_DEG.to_radians().cos();
-    let funit: Vec<Vec3> = fnorm
-        .iter()
-        .map(|f| {
-            let u = f.normalize_or_zero();
-            if u.is_finite() {
-                u
-            } else {
-                Vec3::ZERO
-            }
-        })
-        .collect();
+    let funit: Vec<Vec3> = fnorm.iter().map(|f| unit(*f).unwrap_or(Vec3::ZERO)).collect();
     let mut out_pos = Vec::with_capacity(n);
     let mut out_nrm = Vec::with_capacity(n);
     let mut out_uv = Vec::with_capacity(n);
@@ -562,22 +591,16 @@ fn finish_normals(
         let t = c / 3;
         let own = funit[t];
         let (a, b) = (start[v], start[v + 1]);
-        let mut sum = Vec3::ZERO;
+        let mut sum = DVec3::ZERO;
         for &g in &tris[a..b] {
             if funit[g as usize].dot(own) >= cos_crease {
                 sum += fnorm[g as usize];
             }
         }
-        let mut nrm = sum.normalize_or_zero();
-        if nrm == Vec3::ZERO || !nrm.is_finite() {
-            nrm = own;
-        }
-        if nrm == Vec3::ZERO {
-            nrm = adjacent_sum(v).normalize_or_zero();
-        }
-        if nrm == Vec3::ZERO || !nrm.is_finite() {
-            nrm = Vec3::Y;
-        }
+        let nrm = unit(sum)
+            .or_else(|| (own != Vec3::ZERO).then_some(own))
+            .or_else(|| unit(adjacent_sum(v)))
+            .unwrap_or(Vec3::Y);
         let slot = &mut made[v];
         let idx = match slot.iter().find(|(m, _)| *m == nrm) {
             Some(&(_, k)) => k,

@@ -683,15 +683,23 @@ fn malformed_mtl() {
 
 #[test]
 fn missing_texture() {
+    // An MTL texture that is not found is a warning: the material keeps its Kd colour.
     let dir = tempfile::tempdir().unwrap();
     write(dir.path(), "m.obj", &format!("mtllib m.mtl\nusemtl a\n{TRI_OBJ}"));
-    write(dir.path(), "m.mtl", "newmtl a\nKd 1 1 1\nmap_Kd tex/gone.png\n");
+    write(dir.path(), "m.mtl", "newmtl a\nmap_Kd tex/gone.png\nKd 1 0.5 0.25\n");
     let p = write(dir.path(), "s.toml", &format!("{CAMERA}[[objects]]\nobj = \"m.obj\"\n"));
-    let e = err_of(load_default(&p));
-    assert!(matches!(e, SceneError::Texture { .. }), "{e:?}");
-    assert_msg(&e, &["gone.png", "m.mtl line 3", "not found"]);
+    let s = load_default(&p).unwrap();
+    assert!(s.textures.is_empty());
+    let m = &s.materials[s.meshes[0].material as usize];
+    assert_eq!((m.name.as_str(), m.albedo, m.albedo_texture), ("a", Vec3::new(1.0, 0.5, 0.25), None));
 
-    // A scene-file texture goes through asset resolution.
+    // A directory where the texture should be is an error.
+    std::fs::create_dir_all(dir.path().join("tex/gone.png")).unwrap();
+    let e = err_of(load_default(&p));
+    assert!(matches!(e, SceneError::Mtl { .. }), "{e:?}");
+    assert_msg(&e, &["m.mtl", "line 2", "gone.png", "not a file"]);
+
+    // A scene-file texture goes through asset resolution and stays an error.
     let p =
         write(dir.path(), "s2.toml", &format!("{CAMERA}[[materials]]\nname = \"t\"\nalbedo_texture = \"none.png\"\n"));
     let e = err_of(load_default(&p));
@@ -850,6 +858,156 @@ fn provided_normals_are_normalised_and_repaired() {
     let p = write(dir.path(), "s.toml", &format!("{CAMERA}[[objects]]\nobj = \"n.obj\"\n"));
     let s = load_default(&p).unwrap();
     assert!(s.meshes[0].normals.iter().all(|n| *n == Vec3::Z));
+}
+
+/// Every normal of every mesh is finite and of unit length.
+fn assert_unit_normals(s: &Scene) {
+    for m in &s.meshes {
+        assert_eq!(m.normals.len(), m.positions.len(), "{}", m.name);
+        for n in &m.normals {
+            assert!(n.is_finite() && (n.length() - 1.0).abs() < 1e-5, "mesh {}: normal {n}", m.name);
+        }
+        assert!(m.positions.iter().all(|p| p.is_finite()));
+    }
+}
+
+#[test]
+fn zero_length_normals_and_degenerate_triangles_give_unit_normals() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cases = [
+        // Zero normals on a proper triangle: the face normal (+z).
+        ("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n", Some(Vec3::Z)),
+        // A denormal normal is as good as zero (it cannot be normalised in f32).
+        ("tiny.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 1e-45 0 0\nf 1//1 2//1 3//1\n", None),
+        // Normalised in f32 this one would have length 0.944 (its square is denormal).
+        ("denormal.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 5e-23 0 0\nf 1//1 2//1 3//1\n", Some(Vec3::X)),
+        // Zero normals on degenerate triangles (collinear, one repeated point): +Y fallback.
+        ("degen.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nvn 0 0 0\nf 1//1 2//1 3//1\nf 1//1 1//1 1//1\n", Some(Vec3::Y)),
+        // Generated normals of degenerate triangles, mixed with a proper one.
+        ("gen.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2 3\nf 1 1 1\nf 1 2 4\nf 3 3 2\n", None),
+        // Huge but finite coordinates: edges overflow f32, normals must not.
+        ("huge.obj", "v 0 0 0\nv 3e38 0 0\nv 0 3e38 0\nf 1 2 3\n", Some(Vec3::Z)),
+        // Tiny triangles whose f32 cross product underflows to zero.
+        ("small.obj", "v 0 0 0\nv 1e-30 0 0\nv 0 1e-30 0\nf 1 2 3\n", Some(Vec3::Z)),
+        ("small2.obj", "v 0 0 0\nv 1e-30 0 0\nv 0 1e-30 0\nvn 0 0 0\nf 1//1 2//1 3//1\n", Some(Vec3::Z)),
+    ];
+    let mut toml = CAMERA.to_owned();
+    for (name, obj, _) in &cases {
+        write(d, name, obj);
+        toml.push_str(&format!("[[objects]]\nobj = \"{name}\"\n"));
+    }
+    let s = load_default(&write(d, "s.toml", &toml)).unwrap();
+    assert_unit_normals(&s);
+    for (k, (name, _, want)) in cases.iter().enumerate() {
+        if let Some(w) = want {
+            for &mi in &s.objects[k].meshes {
+                let m = &s.meshes[mi as usize];
+                assert!(m.normals.iter().all(|n| approx(*n, *w, 1e-6)), "{name}: {:?}", m.normals);
+            }
+        }
+    }
+}
+
+#[test]
+fn binary_empty_and_wrongly_encoded_files_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let png: &[u8] = b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR";
+    let utf16: Vec<u8> = b"\xff\xfe".iter().copied().chain("v 0 0 0\n".bytes().flat_map(|b| [b, 0])).collect();
+    let cases: Vec<(&[u8], Vec<&str>)> = vec![
+        (b"", vec!["empty (0 bytes)"]),
+        (b"  \n\t\r\n", vec!["empty (only white space)"]),
+        (png, vec!["PNG image"]),
+        (&utf16, vec!["UTF-16"]),
+        (b"v 0 0 0\nv 1 0\x00 0\n", vec!["line 2", "column 6", "NUL"]),
+        (b"v 0 0 0\no caf\xe9\n", vec!["line 2", "column 6", "0xE9", "UTF-8"]),
+    ];
+    // The same checks for each kind of file: OBJ, MTL and the scene file itself.
+    write(d, "ok.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let ok_scene = write(d, "ok.toml", &format!("{CAMERA}[[objects]]\nobj = \"ok.obj\"\n"));
+    let obj_scene = write(d, "obj.toml", &format!("{CAMERA}[[objects]]\nobj = \"m.obj\"\n"));
+    for (bytes, parts) in &cases {
+        std::fs::write(d.join("m.obj"), bytes).unwrap();
+        let e = err_of(load_default(&obj_scene));
+        assert!(matches!(e, SceneError::Obj { .. }), "{e:?}");
+        assert_msg(&e, &[&["m.obj"], parts.as_slice()].concat());
+
+        std::fs::write(d.join("m.mtl"), bytes).unwrap();
+        let e = err_of(load_default(&ok_scene));
+        assert!(matches!(e, SceneError::Mtl { .. }), "{e:?}");
+        assert_msg(&e, &[&["m.mtl"], parts.as_slice()].concat());
+
+        let p = d.join("bad.toml");
+        std::fs::write(&p, bytes).unwrap();
+        let e = err_of(load_default(&p));
+        assert!(matches!(e, SceneError::Toml { .. }), "{e:?}");
+        assert_msg(&e, &[&["bad.toml"], parts.as_slice()].concat());
+    }
+    // A UTF-8 byte-order mark is fine.
+    write(d, "m.mtl", "\u{feff}newmtl a\n");
+    std::fs::write(d.join("bom.toml"), format!("\u{feff}{CAMERA}")).unwrap();
+    load_default(&ok_scene).unwrap();
+    load_default(&d.join("bom.toml")).unwrap();
+}
+
+#[test]
+fn obj_statements_tobj_would_misread() {
+    // Vertex colours on only some vertices (tobj alone refuses the file), tabs between the
+    // keyword and a name, inline comments after texture coordinates and normals, `l` and `p`
+    // elements: all load, with the statements meaning what they say.
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "m.obj",
+        "mtllib\tm.mtl\nv 0 0 0\nv 1 0 0 0.5 0.5 0.5\n  v 0 2 0 2\nvt 0 0 0 # w\nvn 0 0 1 # up\nusemtl\tred one\n\
+         g\tgroup a\nf 1/1/1 2/1/1 3/1/1\nl 1 2\np 1\n",
+    );
+    write(dir.path(), "m.mtl", "newmtl red one\nKd 1 0 0\n");
+    let p = write(dir.path(), "s.toml", &format!("{CAMERA}[[objects]]\nobj = \"m.obj\"\n"));
+    let s = load_default(&p).unwrap();
+    assert_eq!(s.meshes.len(), 1);
+    assert_eq!(s.meshes[0].name, "group a");
+    assert_eq!(s.meshes[0].indices.len(), 3);
+    // Colours are not a w; a w divides.
+    assert_eq!(s.meshes[0].positions, vec![Vec3::ZERO, Vec3::X, Vec3::Y]);
+    assert_eq!(s.materials[s.meshes[0].material as usize].albedo, Vec3::X);
+    // Statements tobj ignores silently but that are malformed are refused.
+    assert_msg(&obj_case("v 0 0 0\nvt 0 0 0 0\n"), &["m.obj", "line 2", "found 4"]);
+    assert_msg(&obj_case("v 0 0 0\nvn 0 0 1 nan\n"), &["m.obj", "line 2", "found 4"]);
+    assert_msg(&obj_case("v 0 0 0\nvt 0 0 nan\n"), &["m.obj", "line 2", "finite"]);
+}
+
+#[test]
+fn values_that_overflow_once_combined_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(d, "tri.obj", TRI_OBJ);
+    let obj = "[[objects]]\nobj = \"tri.obj\"\n";
+    let light = "[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = [1, 1, 1]\n";
+    let cases: &[(String, &[&str])] = &[
+        ("[camera]\nposition = [3e38, 0, 0]\ntarget = [-3e38, 0, 0]\n".into(), &["camera.target", "overflows"]),
+        (
+            "[camera]\nposition = [3e38, 3e38, 0]\ntarget = [3e38, 3e38, -1]\nup = [1, 1, 0]\n".into(),
+            &["camera", "view or projection matrix is not finite"],
+        ),
+        (format!("{CAMERA}[render]\nexposure = 200\n"), &["render.exposure", "-64..=64"]),
+        (format!("{CAMERA}{obj}scale = 3e38\ntranslate = [3e38, 0, 0]\n"), &["objects.0", "tri.obj", "not finite"]),
+        (
+            format!("{CAMERA}[render]\ntime = 1e30\n{obj}dynamic = true\nmotion = {{ velocity = [1e30, 0, 0] }}\n"),
+            &["objects.0", "time 1000000000000000000000000000000", "not finite"],
+        ),
+        (
+            format!("{CAMERA}[render]\ntime = 1e30\n{light}motion = {{ velocity = [1e30, 0, 0] }}\n"),
+            &["lights.0", "not finite"],
+        ),
+    ];
+    for (k, (text, parts)) in cases.iter().enumerate() {
+        let p = write(d, &format!("case{k}.toml"), text);
+        let e = err_of(load_default(&p));
+        assert!(matches!(e, SceneError::InvalidValue { .. }), "case {k}: {e:?}");
+        assert_msg(&e, &[&[format!("case{k}.toml").as_str()], *parts].concat());
+    }
 }
 
 #[test]

@@ -26,7 +26,9 @@ pub struct GBuffer {
 
 impl GBuffer {
     pub fn new(ctx: &Arc<Context>, width: u32, height: u32) -> GpuResult<GBuffer> {
-        let color = vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED;
+        // TRANSFER_SRC: tests and debugging read every target back.
+        let color =
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC;
         let mk = |name: &str, format, usage| {
             Image::new(ctx, name, ImageDesc::d2(format, width, height, usage)).map(Arc::new)
         };
@@ -34,7 +36,9 @@ impl GBuffer {
             depth: mk(
                 "gbuffer depth",
                 DEPTH_FORMAT,
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+                    | vk::ImageUsageFlags::SAMPLED
+                    | vk::ImageUsageFlags::TRANSFER_SRC,
             )?,
             albedo: mk("gbuffer albedo", ALBEDO_FORMAT, color)?,
             normal: mk("gbuffer normal", NORMAL_FORMAT, color)?,

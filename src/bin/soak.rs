@@ -1,0 +1,156 @@
+//! `soak`: render a dynamic scene for many frames in every schedule mode and watch host memory,
+//! gpu-allocator's figures, validation and the image at a fixed time (see `dvsgi::soak` and
+//! docs/ROBUSTNESS.md). Exits non-zero when memory grows, the image drifts or validation
+//! reports anything.
+
+use clap::Parser;
+use dvsgi::cli::{check_validation, report, CommonArgs};
+use dvsgi::render::Mode;
+use dvsgi::soak::{soak_mode, ModeSoak, SoakOptions};
+use serde::Serialize;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "soak",
+    version,
+    about = "Render a dynamic scene for many frames per schedule mode; memory must stay flat"
+)]
+struct Args {
+    #[command(flatten)]
+    common: CommonArgs,
+    /// Scene file (with moving objects and/or lights).
+    #[arg(long, default_value = "scenes/dynamic-stress.toml")]
+    scene: PathBuf,
+    /// Schedule modes, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "sync,async,async-lagged")]
+    modes: Vec<Mode>,
+    /// Frames per mode.
+    #[arg(long, default_value_t = 3000, value_parser = clap::value_parser!(u32).range(1..=10_000_000))]
+    frames: u32,
+    /// Sample memory and the fixed-time image every this many frames.
+    #[arg(long, default_value_t = 250, value_parser = clap::value_parser!(u32).range(1..))]
+    sample_every: u32,
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    width: u32,
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    height: u32,
+    /// Scene seconds per frame.
+    #[arg(long, default_value_t = 1.0 / 30.0)]
+    dt: f32,
+    /// Largest allowed growth of resident memory after the first sample (MiB).
+    #[arg(long, default_value_t = 8.0)]
+    max_rss_growth_mib: f64,
+    /// Largest allowed drift of the fixed-time image (fraction of its peak radiance).
+    #[arg(long, default_value_t = 0.02)]
+    max_drift: f32,
+    /// Write every sample as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+}
+
+#[derive(Serialize)]
+struct Report<'a> {
+    schema: &'static str,
+    device: String,
+    scene: String,
+    settings: Vec<String>,
+    width: u32,
+    height: u32,
+    frames: u32,
+    dt: f32,
+    modes: &'a [ModeSoak],
+}
+
+fn main() -> ExitCode {
+    match run(Args::parse()) {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(2),
+        Err(e) => {
+            report(&e);
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(args: Args) -> dvsgi::Result<bool> {
+    if let Some(j) = &args.json {
+        dvsgi::output::check_target_dir(j)?;
+    }
+    if !(args.dt.is_finite() && args.dt > 0.0) {
+        return Err(dvsgi::Error::Usage(format!("--dt must be a positive number of seconds, not {}", args.dt)));
+    }
+    let extra = [
+        ("render.width".to_string(), args.width.to_string()),
+        ("render.height".to_string(), args.height.to_string()),
+        ("gi.update_interval".to_string(), "1".to_string()),
+    ];
+    let scene = args.common.load_scene(&args.scene, &extra)?;
+    let ctx = args.common.context()?;
+    let o = SoakOptions { frames: args.frames, sample_every: args.sample_every, dt: args.dt, frames_in_flight: 2 };
+    println!(
+        "soak: {} on {} ({}), {}x{}, {}^3 voxels, {} frames per mode, validation {}",
+        args.scene.display(),
+        ctx.info.name,
+        ctx.info.driver_info,
+        args.width,
+        args.height,
+        scene.settings.gi.voxel_resolution,
+        args.frames,
+        if ctx.validation_enabled { "on" } else { "off" }
+    );
+    let mib = |b: u64| b as f64 / 1048576.0;
+    let mut modes = Vec::new();
+    let mut ok = true;
+    for &mode in &args.modes {
+        println!("mode {}:", mode.name());
+        println!("  frame   host ms/frame   RSS MiB   GPU alloc MiB (n)   GPU blocks MiB (n)   drift     validation");
+        let m = soak_mode(&ctx, &scene, mode, &o, |s| {
+            println!(
+                "  {:>6}  {:>12.2}   {:>8.1}   {:>9.3} ({:>3})      {:>9.3} ({:>2})      {:.2e}  {}",
+                s.frame,
+                s.host_ms,
+                mib(s.rss_bytes),
+                mib(s.gpu_allocated_bytes),
+                s.gpu_allocations,
+                mib(s.gpu_block_bytes),
+                s.gpu_blocks,
+                s.drift,
+                s.validation_messages
+            )
+        })?;
+        let rss = m.growth(|s| s.rss_bytes) as f64 / 1048576.0;
+        let gpu = m.growth(|s| s.gpu_allocated_bytes);
+        let blocks = m.growth(|s| s.gpu_block_bytes);
+        let allocs = m.growth(|s| s.gpu_allocations as u64);
+        println!(
+            "  after the first sample: RSS {rss:+.2} MiB, GPU allocations {gpu:+} B ({allocs:+}), blocks {blocks:+} B; \
+             max drift {:.2e}; {:.1} s",
+            m.max_drift(),
+            m.seconds
+        );
+        if rss > args.max_rss_growth_mib || gpu != 0 || blocks != 0 || allocs != 0 || m.max_drift() > args.max_drift {
+            println!("  FAILED: memory grew or the image drifted");
+            ok = false;
+        }
+        modes.push(m);
+    }
+    if let Some(j) = &args.json {
+        let r = Report {
+            schema: "dvsgi-soak/1",
+            device: ctx.info.name.clone(),
+            scene: args.scene.display().to_string(),
+            settings: args.common.settings(),
+            width: args.width,
+            height: args.height,
+            frames: args.frames,
+            dt: args.dt,
+            modes: &modes,
+        };
+        let text = serde_json::to_string_pretty(&r).map_err(|e| dvsgi::Error::Usage(format!("JSON: {e}")))?;
+        dvsgi::output::write_bytes(j, text.as_bytes())?;
+    }
+    check_validation(&ctx)?;
+    Ok(ok)
+}

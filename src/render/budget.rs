@@ -1,0 +1,202 @@
+//! What a frame will allocate, estimated from the scene and settings before anything is created,
+//! so that settings beyond the device (GPU memory, the largest allocation) are refused up front
+//! with the limit named instead of failing halfway or exhausting the machine. The GPU test
+//! `memory_estimate_matches_what_is_allocated` keeps it within 10% of what is really allocated.
+
+use crate::gpu::{Context, GpuError, GpuResult};
+use crate::render::frame::cone_shadows;
+use crate::render::voxel::VoxelNeeds;
+use crate::scene::{GiMode, Scene, View};
+
+/// What a device offers (`DeviceInfo`'s memory figures).
+pub struct Limits<'a> {
+    pub device: &'a str,
+    /// Largest device-local heap, bytes (0: unknown, not checked).
+    pub heap: u64,
+    /// Largest single allocation, bytes (0: unknown, not checked).
+    pub max_allocation: u64,
+}
+
+/// The large resources of a frame, by group, in bytes.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Estimate {
+    /// Voxel volumes (albedo, normal, emission, flags, radiance, bounces, directional mips).
+    pub volumes: u64,
+    /// The largest single volume (one allocation).
+    pub largest_volume: u64,
+    /// G-buffer, radiance, display and cone-tracing targets.
+    pub targets: u64,
+    /// Shadow maps.
+    pub shadow_maps: u64,
+    /// Vertex and index buffers and textures.
+    pub scene: u64,
+}
+
+impl Estimate {
+    pub fn of(scene: &Scene) -> Estimate {
+        let s = &scene.settings;
+        let shadow_views = crate::render::frame::shadow_map_views(scene);
+        let mut e = Estimate::default();
+        let voxel_view = !matches!(s.view, View::Final | View::Indirect | View::Ao);
+        let px = s.width as u64 * s.height as u64;
+        // depth 4 + albedo 4 + normal 8 + specular 4 + emission 8, radiance 16, display 4.
+        e.targets = px * (28 + 16 + 4);
+        e.shadow_maps = if shadow_views > 0 { 4 * (s.shadow_map_size as u64).pow(2) * shadow_views as u64 } else { 4 };
+        if s.gi.mode == GiMode::Vct || voxel_view {
+            let needs = VoxelNeeds::of(scene);
+            let res = s.gi.voxel_resolution as u64;
+            let n = res * res * res;
+            let mut vols = vec![4 * n, 4 * n, 8 * n]; // albedo, normal (R32_UINT), radiance (RGBA16F)
+            if needs.emission {
+                vols.push(4 * n);
+            }
+            if needs.dynamic {
+                vols.push(n);
+            }
+            vols.extend(std::iter::repeat(8 * n).take(needs.bounces.min(2) as usize));
+            if needs.cones {
+                // Six RGBA16F volumes at half resolution with full mip chains.
+                let chain: u64 = (0..s.gi.voxel_resolution.trailing_zeros()).map(|l| ((res / 2) >> l).pow(3) * 8).sum();
+                vols.extend([chain; 6]);
+                if !voxel_view {
+                    let specular = s.gi.specular && scene.materials.iter().any(|m| m.is_glossy());
+                    let per_px = 8 + if specular { 8 } else { 0 } + if cone_shadows(scene) { 4 } else { 0 };
+                    let k = s.gi.downsample as u64;
+                    let low = (s.width as u64).div_ceil(k) * (s.height as u64).div_ceil(k);
+                    e.targets += per_px * (low + if k > 1 { px } else { 0 });
+                }
+            }
+            e.volumes = vols.iter().sum();
+            e.largest_volume = vols.iter().copied().max().unwrap_or(0);
+        }
+        let vertices: u64 = scene.meshes.iter().map(|m| m.positions.len() as u64).sum();
+        let indices: u64 = scene.meshes.iter().map(|m| m.indices.len() as u64).sum();
+        let texels: u64 = scene.textures.iter().map(|t| t.width as u64 * t.height as u64).sum();
+        // position + normal + uv (32 B) per vertex, 4 B per index, RGBA8 textures with mips (4/3).
+        e.scene = 32 * vertices + 4 * indices + texels * 16 / 3;
+        e
+    }
+
+    pub fn total(&self) -> u64 {
+        self.volumes + self.targets + self.shadow_maps + self.scene
+    }
+
+    /// Refuse what cannot fit this device: more than its largest device-local heap in all, or a
+    /// volume larger than its largest allocation. The message names the limit, the device and
+    /// what to lower.
+    pub fn check(&self, ctx: &Context, scene: &Scene) -> GpuResult<()> {
+        let i = &ctx.info;
+        self.check_limits(
+            scene,
+            &Limits { device: &i.name, heap: i.device_local_heap, max_allocation: i.max_allocation },
+        )
+    }
+
+    /// `check` against given limits.
+    pub fn check_limits(&self, scene: &Scene, info: &Limits) -> GpuResult<()> {
+        let res = scene.settings.gi.voxel_resolution;
+        let lower = if self.volumes > 0 {
+            let mut fits = res / 2;
+            while fits > 8 && self.with_resolution(scene, fits) > info.heap {
+                fits /= 2;
+            }
+            format!("; lower gi.voxel_resolution ({res} now, {fits} fits), gi.bounces or the image size")
+        } else {
+            "; lower the image size or render.shadow_map_size".to_owned()
+        };
+        if info.heap > 0 && self.total() > info.heap {
+            return Err(GpuError::Limit(format!(
+                "{}: the frame needs about {} of GPU memory (voxel volumes {} at {res}^3, targets {}, shadow maps {}, \
+                 scene {}), more than {}'s largest device-local memory heap ({}){lower}",
+                scene.path.display(),
+                mib(self.total()),
+                mib(self.volumes),
+                mib(self.targets),
+                mib(self.shadow_maps),
+                mib(self.scene),
+                info.device,
+                mib(info.heap),
+            )));
+        }
+        if info.max_allocation > 0 && self.largest_volume > info.max_allocation {
+            return Err(GpuError::Limit(format!(
+                "{}: a {res}^3 voxel volume needs {} in one allocation, more than {}'s maxMemoryAllocationSize ({}){lower}",
+                scene.path.display(),
+                mib(self.largest_volume),
+                info.device,
+                mib(info.max_allocation),
+            )));
+        }
+        Ok(())
+    }
+
+    /// The total with another voxel resolution (for the advice in `check`).
+    fn with_resolution(&self, scene: &Scene, res: u32) -> u64 {
+        let mut s = scene.clone();
+        s.settings.gi.voxel_resolution = res;
+        let e = Estimate::of(&s);
+        e.volumes + self.targets + self.shadow_maps + self.scene
+    }
+}
+
+fn mib(bytes: u64) -> String {
+    let m = bytes as f64 / (1024.0 * 1024.0);
+    if m < 10.0 {
+        format!("{m:.1} MiB")
+    } else {
+        format!("{m:.0} MiB")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn voxel_volume_bytes_follow_the_needs() {
+        let mut scene = crate::render::test_scene(vec![]);
+        scene.settings.width = 10;
+        scene.settings.height = 10;
+        scene.settings.gi.voxel_resolution = 8;
+        scene.settings.gi.bounces = 1;
+        let e = Estimate::of(&scene);
+        // albedo + normal 2 x 2048, radiance 4096, one bounce 4096, six directional chains of
+        // (64 + 8 + 1) texels x 8 bytes.
+        assert_eq!(e.volumes, 2 * 2048 + 4096 + 4096 + 6 * 73 * 8);
+        assert_eq!(e.largest_volume, 4096);
+        assert_eq!(e.targets, 100 * 48 + 100 * 8, "G-buffer, radiance, display, diffuse cones");
+        scene.settings.gi.mode = GiMode::None;
+        assert_eq!(Estimate::of(&scene).volumes, 0);
+        // 512^3 with one bounce: albedo, normal 0.5 GiB each, radiance and bounce 1 GiB each,
+        // directional 6 x 146.3 MiB: 3.86 GiB.
+        scene.settings.gi.mode = GiMode::Vct;
+        scene.settings.gi.voxel_resolution = 512;
+        let v = Estimate::of(&scene).volumes as f64 / (1u64 << 30) as f64;
+        assert!((v - 3.857).abs() < 0.01, "{v} GiB");
+    }
+
+    #[test]
+    fn settings_beyond_the_heap_or_the_largest_allocation_are_refused_naming_the_limit() {
+        let mut scene = crate::render::test_scene(vec![]);
+        scene.settings.width = 64;
+        scene.settings.height = 64;
+        scene.settings.gi.voxel_resolution = 512;
+        let lim = |heap, max_allocation| Limits { device: "llvmpipe", heap, max_allocation };
+        let e = Estimate::of(&scene);
+        let err = e.check_limits(&scene, &lim(2 << 30, 2 << 30)).unwrap_err().to_string();
+        for part in
+            ["test:", "about 3950 MiB", "512^3", "llvmpipe's largest device-local memory heap (2048 MiB)", "256 fits"]
+        {
+            assert!(err.contains(part), "{part:?} missing from: {err}");
+        }
+        let err = e.check_limits(&scene, &lim(64 << 30, 512 << 20)).unwrap_err().to_string();
+        assert!(
+            err.contains("1024 MiB in one allocation") && err.contains("maxMemoryAllocationSize (512 MiB)"),
+            "{err}"
+        );
+        assert!(e.check_limits(&scene, &lim(64 << 30, 2 << 30)).is_ok());
+        assert!(e.check_limits(&scene, &lim(0, 0)).is_ok(), "unknown limits are not checked");
+        scene.settings.gi.voxel_resolution = 256;
+        assert!(Estimate::of(&scene).check_limits(&scene, &lim(2 << 30, 2 << 30)).is_ok());
+    }
+}
