@@ -66,6 +66,7 @@ struct Args {
 }
 
 fn main() -> ExitCode {
+    dvsgi::cli::init_logging();
     match run(Args::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

@@ -64,6 +64,7 @@ struct Report<'a> {
 }
 
 fn main() -> ExitCode {
+    dvsgi::cli::init_logging();
     match run(Args::parse()) {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(2),

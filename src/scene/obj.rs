@@ -3,7 +3,8 @@
 //! `tobj` reports errors without line numbers and can panic on some malformed MTL lines, so
 //! the OBJ text is validated here first (line by line, with line numbers) and the MTL files
 //! are parsed here; `tobj` then only does the grouping, triangulation and index
-//! de-duplication of input that is known to be well-formed.
+//! de-duplication of input that is known to be well-formed, handed to it in a canonical
+//! form (see `Prescan::normalized`) so that it reads each statement the way it was checked.
 
 use super::error::SceneError;
 use super::types::{Aabb, Texture};

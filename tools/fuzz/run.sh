@@ -11,6 +11,7 @@
 # optimizations plus debug assertions and overflow checks, without a sanitizer (the loader
 # is safe Rust; assertions and panics are what the targets look for). The corpus lives in
 # tools/fuzz/corpus/TARGET, crashes in tools/fuzz/artifacts/TARGET (both git-ignored).
+# The targets type-check on stable too: cargo check --manifest-path tools/fuzz/Cargo.toml --bins
 # Minimize a crash with:
 #   cargo +nightly fuzz tmin --fuzz-dir tools/fuzz -O -a -s none TARGET tools/fuzz/artifacts/TARGET/crash-...
 set -euo pipefail
