@@ -5,19 +5,10 @@
 
 mod common;
 
-use common::repo;
+use common::dvsgi;
 use dvsgi::sweep::{Results, Row};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn dvsgi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dvsgi"))
-        .args(args)
-        .current_dir(repo())
-        .env("DVSGI_VALIDATION", "1")
-        .output()
-        .expect("run dvsgi")
-}
+use std::process::Output;
 
 fn text(o: &Output) -> String {
     format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))

@@ -7,23 +7,14 @@
 
 mod common;
 
-use common::repo;
+use common::{dvsgi, repo};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 // The fuzz targets' fixture and per-target functions (tools/fuzz/src/lib.rs).
 #[allow(dead_code)]
 #[path = "../tools/fuzz/src/lib.rs"]
 mod fuzz;
-
-fn dvsgi(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_dvsgi"))
-        .args(args)
-        .current_dir(repo())
-        .env("DVSGI_VALIDATION", "1")
-        .output()
-        .expect("run dvsgi")
-}
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()

@@ -3,18 +3,9 @@
 
 mod common;
 
-use common::repo;
+use common::{dvsgi_with, repo};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn dvsgi(args: &[&str], env: &[(&str, &str)]) -> Output {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_dvsgi"));
-    c.args(args).current_dir(repo()).env("DVSGI_VALIDATION", "1");
-    for (k, v) in env {
-        c.env(k, v);
-    }
-    c.output().expect("run dvsgi")
-}
+use std::process::Output;
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
@@ -31,7 +22,7 @@ fn render_fails(scene: &Path, extra: &[&str], env: &[(&str, &str)]) -> String {
     let mut args =
         vec!["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--width", "32", "--height", "32"];
     args.extend_from_slice(extra);
-    let o = dvsgi(&args, env);
+    let o = dvsgi_with(&args, env);
     let err = stderr(&o);
     assert!(!o.status.success(), "expected failure, got success; stderr:\n{err}");
     assert_eq!(o.status.code(), Some(1), "exit code; stderr:\n{err}");
@@ -64,7 +55,7 @@ fn render_writes_png_and_exr() {
     let dir = tempfile::tempdir().unwrap();
     let png = dir.path().join("a.png");
     let exr = dir.path().join("a.exr");
-    let o = dvsgi(
+    let o = dvsgi_with(
         &[
             "render",
             "scenes/cornell-box.toml",
@@ -87,7 +78,7 @@ fn render_writes_png_and_exr() {
 
 #[test]
 fn info_reports_device_and_queue_topology() {
-    let o = dvsgi(&["info", "scenes/cornell-box.toml", "--set", "gi.mode=\"none\""], &[]);
+    let o = dvsgi_with(&["info", "scenes/cornell-box.toml", "--set", "gi.mode=\"none\""], &[]);
     let out = stdout(&o);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.contains("queue topology:"), "{out}");
@@ -112,8 +103,10 @@ fn info_reports_device_and_queue_topology() {
 /// volumes with their memory, and no emission volume, flag volume or dynamic passes.
 #[test]
 fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
-    let o =
-        dvsgi(&["info", "scenes/cornell-box.toml", "--set", "gi.mode=\"vct\"", "--set", "gi.voxel_resolution=32"], &[]);
+    let o = dvsgi_with(
+        &["info", "scenes/cornell-box.toml", "--set", "gi.mode=\"vct\"", "--set", "gi.voxel_resolution=32"],
+        &[],
+    );
     let out = stdout(&o);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.contains("voxel clear -> voxelize static -> shadow maps"), "{out}");
@@ -131,7 +124,7 @@ fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
     assert!(out.contains("volume voxel radiance -z") && out.contains("image gi diffuse"), "{out}");
     assert!(!out.contains("gi upsample") && !out.contains("bounce b"), "{out}");
     // Glossy materials add the specular target; reduced resolution adds the upsample.
-    let o = dvsgi(
+    let o = dvsgi_with(
         &["info", "scenes/cornell-glossy.toml", "--set", "gi.voxel_resolution=16", "--set", "gi.downsample=2"],
         &[],
     );
@@ -139,7 +132,7 @@ fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(out.contains("image gi specular (1/2)") && out.contains("cone trace -> gi upsample"), "{out}");
     // No cones without GI: the voxel views that show the volumes themselves build no mips.
-    let o = dvsgi(
+    let o = dvsgi_with(
         &[
             "info",
             "scenes/cornell-box.toml",
@@ -152,9 +145,9 @@ fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
     );
     let out = stdout(&o);
     assert!(out.contains("voxelize static") && !out.contains("voxel mips") && !out.contains("cone trace"), "{out}");
-    let o = dvsgi(&["info", "scenes/dynamic-test.toml", "--gi", "vct"], &[]);
+    let o = dvsgi_with(&["info", "scenes/dynamic-test.toml", "--gi", "vct"], &[]);
     assert!(!o.status.success(), "info takes --set, not --gi");
-    let o = dvsgi(
+    let o = dvsgi_with(
         &["info", "scenes/dynamic-test.toml", "--set", "gi.mode=\"vct\"", "--set", "gi.voxel_resolution=16"],
         &[],
     );
@@ -167,7 +160,7 @@ fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
 fn voxel_view_renders() {
     let dir = tempfile::tempdir().unwrap();
     let png = dir.path().join("v.png");
-    let o = dvsgi(
+    let o = dvsgi_with(
         &[
             "render",
             "scenes/cornell-box.toml",
@@ -305,8 +298,10 @@ fn missing_and_corrupt_textures() {
     let p = scene_with_obj(dir.path(), obj, Some("newmtl a\nKd 1 1 1\nmap_Kd missing.png\n"));
     // A missing texture is a warning (the material keeps its Kd colour) ...
     let png = dir.path().join("out.png");
-    let o =
-        dvsgi(&["render", p.to_str().unwrap(), "--out", png.to_str().unwrap(), "--width", "32", "--height", "32"], &[]);
+    let o = dvsgi_with(
+        &["render", p.to_str().unwrap(), "--out", png.to_str().unwrap(), "--width", "32", "--height", "32"],
+        &[],
+    );
     let err = stderr(&o);
     assert!(o.status.success(), "{err}");
     assert!(err.contains("warning: ") && err.contains("m.mtl: line 3") && err.contains("`missing.png`"), "{err}");
@@ -333,8 +328,10 @@ fn textured_material_renders() {
     let obj = "mtllib m.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nusemtl a\nf 1/1/1 2/2/1 3/3/1 4/4/1\n";
     let p = scene_with_obj(dir.path(), obj, Some("newmtl a\nKd 1 1 1\nmap_Kd t.png\n"));
     let exr = dir.path().join("o.exr");
-    let o =
-        dvsgi(&["render", p.to_str().unwrap(), "--out", exr.to_str().unwrap(), "--width", "32", "--height", "32"], &[]);
+    let o = dvsgi_with(
+        &["render", p.to_str().unwrap(), "--out", exr.to_str().unwrap(), "--width", "32", "--height", "32"],
+        &[],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let img = dvsgi::output::read_rgb_f32(&exr).unwrap();
     let at = |x: u32, y: u32| {
@@ -367,7 +364,7 @@ fn every_schedule_is_clean_under_queue_submit_synchronization_validation() {
     let dir = tempfile::tempdir().unwrap();
     for mode in ["sync", "async", "async-lagged"] {
         let png = dir.path().join(format!("{mode}.png"));
-        let o = dvsgi(
+        let o = dvsgi_with(
             &[
                 "render",
                 "scenes/cornell-glossy.toml",
@@ -402,7 +399,7 @@ fn every_schedule_is_clean_under_queue_submit_synchronization_validation() {
 
 #[test]
 fn unknown_schedule_mode_is_a_usage_error() {
-    let o = dvsgi(&["render", "scenes/cornell-box.toml", "--out", "x.png", "--schedule", "fast"], &[]);
+    let o = dvsgi_with(&["render", "scenes/cornell-box.toml", "--out", "x.png", "--schedule", "fast"], &[]);
     assert_eq!(o.status.code(), Some(2), "clap usage error");
     assert!(stderr(&o).contains("unknown schedule mode 'fast'"), "{}", stderr(&o));
 }

@@ -12,7 +12,7 @@ use common::*;
 use dvsgi::gpu::{Context, Image};
 use dvsgi::render::{FrameOutput, Renderer};
 use dvsgi::scene::*;
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Mat4, Vec3};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -297,25 +297,6 @@ fn scene_scale_from_a_thousandth_to_ten_thousand_units_is_invariant() {
         let d = rel_diff(&unit, &o.out, 1.0);
         eprintln!("scale {k}: largest difference {d:.2e} of the peak");
         assert!(d < 0.02, "scale {k}: image differs from the unit-scale image by {d} of its peak");
-    }
-}
-
-fn mesh(name: &str, tris: &[[Vec3; 3]], material: u32, normal: Option<Vec3>) -> Mesh {
-    let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
-    let normals = tris
-        .iter()
-        .flat_map(|t| [normal.unwrap_or_else(|| (t[1] - t[0]).cross(t[2] - t[0]).normalize_or(Vec3::Y)); 3])
-        .collect();
-    let mut bounds = Aabb::EMPTY;
-    positions.iter().for_each(|p| bounds.grow(*p));
-    Mesh {
-        name: name.into(),
-        uvs: vec![Vec2::ZERO; positions.len()],
-        indices: (0..positions.len() as u32).collect(),
-        positions,
-        normals,
-        material,
-        bounds,
     }
 }
 

@@ -5,33 +5,11 @@ mod common;
 use common::*;
 use dvsgi::render::Renderer;
 use dvsgi::scene::*;
-use glam::{Mat4, Vec2, Vec3};
+use glam::{Mat4, Vec3};
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 
 const RES: u32 = 32;
-
-fn mesh(name: &str, tris: &[[Vec3; 3]], material: u32) -> Mesh {
-    let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
-    let normals = tris
-        .iter()
-        .flat_map(|t| {
-            let n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or(Vec3::Y);
-            [n; 3]
-        })
-        .collect();
-    let mut bounds = Aabb::EMPTY;
-    positions.iter().for_each(|p| bounds.grow(*p));
-    Mesh {
-        name: name.into(),
-        uvs: vec![Vec2::ZERO; positions.len()],
-        indices: (0..positions.len() as u32).collect(),
-        positions,
-        normals,
-        material,
-        bounds,
-    }
-}
 
 /// A scene whose voxel grid is exactly [0, RES]^3 in world units (voxel (i,j,k) = [i,i+1]x...).
 fn scene(objects: Vec<(Mesh, bool, Motion)>) -> Scene {
@@ -182,7 +160,7 @@ fn voxelization_is_conservative_and_tight() {
     }
     let ctx = context();
     for (name, t) in &tris {
-        let mut r = Renderer::new(&ctx, scene(vec![(mesh(name, &[*t], 0), false, Motion::None)])).unwrap();
+        let mut r = Renderer::new(&ctx, scene(vec![(mesh(name, &[*t], 0, None), false, Motion::None)])).unwrap();
         r.render(0.0, false).unwrap();
         let got = occupied(&albedo_volume(&mut r), RES);
         let required = reference(t, -1e-3);
@@ -218,7 +196,8 @@ fn voxel_albedo_and_normal_are_averaged() {
         [v(4.0, 10.5, 4.0), v(12.0, 10.5, 12.0), v(4.0, 10.5, 12.0)],
     ];
     let ctx = context();
-    let s = scene(vec![(mesh("a", &quad, 0), false, Motion::None), (mesh("b", &quad, 1), false, Motion::None)]);
+    let s =
+        scene(vec![(mesh("a", &quad, 0, None), false, Motion::None), (mesh("b", &quad, 1, None), false, Motion::None)]);
     let mut r = Renderer::new(&ctx, s).unwrap();
     r.render(0.0, false).unwrap();
     let albedo: Vec<u32> = bytemuck::pod_collect_to_vec(&albedo_volume(&mut r));
@@ -259,9 +238,9 @@ fn dynamic_update_clears_old_voxels_and_keeps_static_ones() {
     ]);
     let ctx = context();
     let s = scene(vec![
-        (mesh("floor", &floor, 0), false, Motion::None),
-        (mesh("wall", &wall, 0), false, Motion::None),
-        (mesh("blob", &blob, 1), true, motion.clone()),
+        (mesh("floor", &floor, 0, None), false, Motion::None),
+        (mesh("wall", &wall, 0, None), false, Motion::None),
+        (mesh("blob", &blob, 1, None), true, motion.clone()),
     ]);
     let mut r = Renderer::new(&ctx, s).unwrap();
     assert!(r.pass_names(false).contains(&"voxel clear dynamic".to_string()));
@@ -444,7 +423,7 @@ fn voxel_radiance_is_black_without_light_and_carries_emission() {
         [v(4.0, 10.5, 4.0), v(12.0, 10.5, 4.0), v(12.0, 10.5, 12.0)],
         [v(4.0, 10.5, 4.0), v(12.0, 10.5, 12.0), v(4.0, 10.5, 12.0)],
     ];
-    let mut s = scene(vec![(mesh("quad", &quad, 0), false, Motion::None)]);
+    let mut s = scene(vec![(mesh("quad", &quad, 0, None), false, Motion::None)]);
     let mut r = Renderer::new(&ctx, s.clone()).unwrap();
     r.render(0.0, false).unwrap();
     let rad = radiance_volume(&mut r);
@@ -516,7 +495,7 @@ fn anisotropic_mips_match_the_cpu_reference() {
         .map(|i| {
             let c = rng.point(4.0, 28.0);
             let tri = [c + rng.point(-6.0, 6.0), c + rng.point(-6.0, 6.0), c + rng.point(-6.0, 6.0)];
-            (mesh(&format!("t{i}"), &[tri], i % 2), false, Motion::None)
+            (mesh(&format!("t{i}"), &[tri], i % 2, None), false, Motion::None)
         })
         .collect();
     let mut s = scene(objects);

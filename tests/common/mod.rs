@@ -7,10 +7,47 @@ use dvsgi::render::{FrameOutput, Renderer};
 use dvsgi::scene::{self, LoadOptions, Scene};
 use glam::{Vec3, Vec4};
 use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 use std::sync::Arc;
 
 pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Run the `dvsgi` binary from the repository root with validation on.
+pub fn dvsgi(args: &[&str]) -> Output {
+    dvsgi_with(args, &[])
+}
+
+/// [`dvsgi`] with extra environment variables.
+pub fn dvsgi_with(args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_dvsgi"));
+    c.args(args).current_dir(repo()).env("DVSGI_VALIDATION", "1");
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    c.output().expect("run dvsgi")
+}
+
+/// A mesh of separate triangles with flat normals (or `normal` for every vertex, which may be
+/// degenerate on purpose) and zero UVs.
+pub fn mesh(name: &str, tris: &[[Vec3; 3]], material: u32, normal: Option<Vec3>) -> dvsgi::scene::Mesh {
+    let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
+    let normals = tris
+        .iter()
+        .flat_map(|t| [normal.unwrap_or_else(|| (t[1] - t[0]).cross(t[2] - t[0]).normalize_or(Vec3::Y)); 3])
+        .collect();
+    let mut bounds = dvsgi::scene::Aabb::EMPTY;
+    positions.iter().for_each(|p| bounds.grow(*p));
+    dvsgi::scene::Mesh {
+        name: name.into(),
+        uvs: vec![glam::Vec2::ZERO; positions.len()],
+        indices: (0..positions.len() as u32).collect(),
+        positions,
+        normals,
+        material,
+        bounds,
+    }
 }
 
 /// A context with the validation layer on (tests always validate).
