@@ -9,7 +9,7 @@
 mod common;
 
 use common::*;
-use dvsgi::gpu::{Context, Image};
+use dvsgi::gpu::Context;
 use dvsgi::render::{FrameOutput, Renderer};
 use dvsgi::scene::*;
 use glam::{Mat4, Vec3};
@@ -29,23 +29,6 @@ fn cornell(overrides: &[(&str, &str)]) -> Scene {
     ];
     all.extend_from_slice(overrides);
     common::load(&repo().join("scenes/cornell-box.toml"), &all)
-}
-
-/// Floats of an image level that holds them (f32 / f16 / depth); None for integer and 8-bit
-/// formats, which cannot hold a non-finite value.
-fn floats(r: &mut Renderer, img: &Arc<Image>, level: u32) -> Option<Vec<f32>> {
-    use ash::vk::Format as F;
-    let f = img.desc.format;
-    if !matches!(f, F::R32G32B32A32_SFLOAT | F::R16G16B16A16_SFLOAT | F::D32_SFLOAT) {
-        return None;
-    }
-    let bytes = r.download_level(img, level).unwrap();
-    Some(match f {
-        F::R16G16B16A16_SFLOAT => {
-            bytemuck::pod_collect_to_vec::<u8, half::f16>(&bytes).iter().map(|h| h.to_f32()).collect()
-        }
-        _ => bytemuck::pod_collect_to_vec::<u8, f32>(&bytes),
-    })
 }
 
 /// Upper bound on any outgoing radiance of a Lambertian scene: with emission at most Le,
@@ -128,7 +111,7 @@ fn check(ctx: &Arc<Context>, label: &str, scene: Scene, frames: u32) -> Checked 
     let mut read = Vec::new();
     for img in r.all_images() {
         for level in 0..img.desc.mip_levels {
-            let Some(v) = floats(&mut r, &img, level) else { continue };
+            let Some(v) = float_texels(&mut r, &img, level) else { continue };
             let name = format!("{label}: {} level {level}", img.name);
             let bad = v.iter().filter(|x| !x.is_finite()).count();
             assert_eq!(bad, 0, "{name}: {bad} of {} floats are NaN/Inf", v.len());

@@ -4,11 +4,9 @@
 mod common;
 
 use common::*;
-use dvsgi::gpu::Image;
 use dvsgi::render::{FrameOutput, Renderer};
 use dvsgi::scene::Scene;
 use glam::Vec3;
-use std::sync::Arc;
 
 const SIZE: &str = "64";
 
@@ -129,18 +127,6 @@ fn bounces_add_light_monotonically_and_converge() {
     assert!(steps.iter().all(|&s| s > -noise), "bounces made the image darker: means {means:?}");
     assert!(steps[0] > 10.0 * noise, "the first bounce adds light: means {means:?}");
     assert!(steps[3] < 0.5 * steps[0], "bounces do not converge: means {means:?}");
-}
-
-/// f32 RGBA texels of an RGBA16F (or RGBA8 unorm) image level; None for other formats.
-fn float_texels(r: &mut Renderer, img: &Arc<Image>, level: u32) -> Option<Vec<f32>> {
-    let bytes = r.download_level(img, level).unwrap();
-    match img.desc.format {
-        ash::vk::Format::R16G16B16A16_SFLOAT => {
-            Some(bytemuck::pod_collect_to_vec::<u8, half::f16>(&bytes).iter().map(|h| h.to_f32()).collect())
-        }
-        ash::vk::Format::R8G8B8A8_UNORM => Some(bytes.iter().map(|&b| b as f32 / 255.0).collect()),
-        _ => None,
-    }
 }
 
 /// Every float volume (all mip levels) and every cone-tracing target of a renderer.

@@ -50,6 +50,24 @@ pub fn mesh(name: &str, tris: &[[Vec3; 3]], material: u32, normal: Option<Vec3>)
     }
 }
 
+/// The texels of an image level as f32 (RGBA32F, RGBA16F, D32 depth, RGBA8 unorm); None for
+/// integer, sRGB and other formats.
+pub fn float_texels(r: &mut Renderer, img: &Arc<dvsgi::gpu::Image>, level: u32) -> Option<Vec<f32>> {
+    use ash::vk::Format as F;
+    let f = img.desc.format;
+    if !matches!(f, F::R32G32B32A32_SFLOAT | F::R16G16B16A16_SFLOAT | F::D32_SFLOAT | F::R8G8B8A8_UNORM) {
+        return None;
+    }
+    let bytes = r.download_level(img, level).unwrap();
+    Some(match f {
+        F::R16G16B16A16_SFLOAT => {
+            bytemuck::pod_collect_to_vec::<u8, half::f16>(&bytes).iter().map(|h| h.to_f32()).collect()
+        }
+        F::R8G8B8A8_UNORM => bytes.iter().map(|&b| b as f32 / 255.0).collect(),
+        _ => bytemuck::pod_collect_to_vec::<u8, f32>(&bytes),
+    })
+}
+
 /// A context with the validation layer on (tests always validate).
 pub fn context() -> Arc<Context> {
     Context::new(&ContextDesc { validation: true, device: None })
