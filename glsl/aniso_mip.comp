@@ -3,7 +3,12 @@
 // block of the level below (the full-resolution radiance volume for level 0); for the
 // volume of direction +x the block's front voxel along x is composited over its back voxel
 // (premultiplied "over": c = c_front + (1 - a_front) c_back) for each of the four rows, and
-// the four rows are averaged. Same for -x (front = high x), +y, -y, +z, -z.
+// the four rows are averaged. Same for -x (front = high x), +y, -y, +z, -z. Texels are stored
+// as (L * tau, tau) (voxel.glsl); the full-resolution volume holds (L, occupancy 0 or 1),
+// which is premultiplied already.
+#include "common.glsl"
+#include "voxel.glsl"
+
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 
 // Level 0 reads the full-resolution volume (bound in every slot of `src`); higher levels
@@ -18,7 +23,7 @@ vec4 over(vec4 front, vec4 back) {
 }
 
 // Literal indices only: arrays of storage images are not indexed dynamically.
-#define LOAD(FACE, C) (FROM_FULL ? imageLoad(src[0], C) : imageLoad(src[FACE], C))
+#define LOAD(FACE, C) (FROM_FULL ? imageLoad(src[0], C) : alpha_from_tau(imageLoad(src[FACE], C)))
 
 #define INTEGRATE(FACE, AXIS, FRONT)                                              \
     {                                                                             \
@@ -32,7 +37,7 @@ vec4 over(vec4 front, vec4 back) {
                 acc += over(LOAD(FACE, front), LOAD(FACE, back));                 \
             }                                                                     \
         }                                                                         \
-        imageStore(dst[FACE], c, min(acc * 0.25, vec4(65504.0)));                 \
+        imageStore(dst[FACE], c, min(tau_from_alpha(acc * 0.25), vec4(HALF_MAX)));  \
     }
 
 void main() {

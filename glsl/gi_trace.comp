@@ -14,6 +14,9 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(constant_id = 0) const bool HAS_SPECULAR = false;
 layout(constant_id = 1) const bool CONE_SHADOWS = false;
+// gi.diffuse_rays: > 0 replaces the diffuse cones by this many rays (a diagnostic). A
+// specialization constant: the ordinary pipeline has no trace of it.
+layout(constant_id = 2) const uint DIFFUSE_RAYS = 0u;
 
 layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
@@ -37,6 +40,60 @@ float specular_tan_half(float n) {
     return tan(clamp(a, radians(0.25), radians(85.0)));
 }
 
+// A PCG hash step (O'Neill 2014), for the diagnostic ray gather.
+float next_random(inout uint state) {
+    state = state * 747796405u + 2891336453u;
+    uint w = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return float((w >> 22u) ^ w) * (1.0 / 4294967296.0);
+}
+
+// Radiance of the first occupied voxel along a ray from g (voxel units), by a 3D DDA through
+// the full-resolution volume; black when the ray leaves the grid.
+vec3 first_voxel_radiance(vec3 g, vec3 d) {
+    int res = int(grid.dims.x);
+    ivec3 c = ivec3(floor(g));
+    ivec3 stp = ivec3(sign(d));
+    vec3 inv = 1.0 / d;
+    vec3 next = (vec3(c) + max(vec3(stp), vec3(0.0)) - g) * inv;
+    vec3 delta = abs(inv);
+    for (int i = 0; i < 3 * 512; ++i) {
+        if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(res)))) break;
+        vec4 v = texelFetch(vox_lod0, c, 0);
+        if (v.a > 0.0) return v.rgb;
+        if (next.x < next.y && next.x < next.z) {
+            c.x += stp.x;
+            next.x += delta.x;
+        } else if (next.y < next.z) {
+            c.y += stp.y;
+            next.y += delta.y;
+        } else {
+            c.z += stp.z;
+            next.z += delta.z;
+        }
+    }
+    return vec3(0.0);
+}
+
+// The diagnostic alternative to the diffuse cones (gi.diffuse_rays = n): the mean radiance of
+// n cosine-distributed rays through the full-resolution voxels, each to its first occupied
+// voxel. It starts past every voxel the surface touches (|n|_1 off it) and is exact for the
+// voxelized scene up to noise, so it separates the voxels' error from the cones'.
+vec3 ray_gather(ConeOrigin o, uint n, uint seed) {
+    mat3 tbn = tangent_frame(o.n);
+    vec3 g = o.p + o.n * (abs(o.n.x) + abs(o.n.y) + abs(o.n.z) + 1e-3);
+    vec3 sum = vec3(0.0);
+    // llvmpipe stops loops after 65535 iterations per invocation, across all of them: keep
+    // rays x (longest walk, 3 res) below that.
+    n = max(min(n, 60000u / (3u * grid.dims.x)), 1u);
+    for (uint i = 0u; i < n; ++i) {
+        float u1 = next_random(seed), u2 = next_random(seed);
+        float r = sqrt(u1), phi = 6.2831853 * u2;
+        vec3 d = normalize(tbn * vec3(r * cos(phi), r * sin(phi), sqrt(max(0.0, 1.0 - u1))));
+        sum += first_voxel_radiance(g, d);
+    }
+    return sum / float(n);
+}
+
 void main() {
     ivec2 lo = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(lo, imageSize(out_diffuse)))) return;
@@ -53,9 +110,15 @@ void main() {
     vec4 ns = texelFetch(g_normal, px, 0);
     vec3 N = safe_normalize(ns.xyz, vec3(0.0, 1.0, 0.0));
     float voxel = grid.origin.w;
-    vec3 g = (P - grid.origin.xyz) / voxel + N * gi.trace.z;
+    ConeOrigin o = ConeOrigin((P - grid.origin.xyz) / voxel, N, 0.0);
 
-    vec4 diffuse = trace_diffuse(g, N);
+    vec4 diffuse;
+    if (DIFFUSE_RAYS > 0u) {
+        uint seed = (uint(lo.x) * 1973u) ^ (uint(lo.y) * 9277u) ^ 0x9e3779b9u;
+        diffuse = vec4(ray_gather(o, DIFFUSE_RAYS, seed), 1.0);
+    } else {
+        diffuse = trace_diffuse(o);
+    }
     if ((gi.counts.w & GI_FLAG_AO) == 0u) diffuse.a = 1.0;
     imageStore(out_diffuse, lo, diffuse);
 
@@ -65,7 +128,7 @@ void main() {
         if (max(ks.r, max(ks.g, ks.b)) > 0.0) {
             vec3 V = safe_normalize(frame.camera_pos.xyz - P, N);
             vec3 R = reflect(-V, N);
-            spec = trace_cone(g, R, specular_tan_half(ns.a), 1e30).radiance;
+            spec = trace_cone(o, R, specular_tan_half(ns.a), 1e30).radiance;
         }
         imageStore(out_specular, lo, vec4(spec, 1.0));
     }
@@ -79,9 +142,8 @@ void main() {
             if (dot(s.wi, N) <= 0.0) continue;
             // Also step off along the light direction: at grazing angles the cone would
             // otherwise run through the surface's own voxels.
-            vec3 gs = g + s.wi * gi.trace.z;
             float dist = s.distance > 0.0 ? s.distance / voxel - 2.0 * gi.trace.z : 1e30;
-            vis[i] = 1.0 - trace_cone(gs, s.wi, gi.shadow.x, dist).opacity;
+            vis[i] = 1.0 - trace_cone(o, s.wi, gi.shadow.x, dist).opacity;
         }
         imageStore(out_shadow, lo, vis);
     }

@@ -30,8 +30,7 @@ void main() {
     vec3 albedo = unpack_rgb_count(a).rgb / 255.0;
     vec3 n_avg = unpack_rgb_count(imageLoad(vox_normal, c).r).rgb / 255.0 * 2.0 - 1.0;
     vec3 N = safe_normalize(n_avg, vec3(0.0, 1.0, 0.0));
-    vec3 g = vec3(c) + 0.5 + N * gi.trace.z;
-    vec4 d = trace_diffuse(g, N);
+    vec4 d = trace_diffuse(ConeOrigin(vec3(c) + 0.5, N, 0.5));
     vec4 direct = texelFetch(vox_direct, c, 0);
     imageStore(vox_out, c, vec4(min(direct.rgb + albedo * d.rgb, vec3(HALF_MAX)), 1.0));
 }

@@ -34,13 +34,9 @@ void main() {
     vec3 color = vec3(0.0);
     float alpha = 0.0;
     for (float t = ray.tenter + 0.5 * step; t < ray.texit && alpha < 0.995; t += step) {
-        vec4 s = sample_voxels(o + d * t, sdir, pc.lod);
-        float a = clamp(s.a, 0.0, 1.0);
-        if (a > 0.0) {
-            float c = 1.0 - pow(1.0 - min(a, 0.9999), 0.5);
-            color += (1.0 - alpha) * max(s.rgb, vec3(0.0)) * (c / a);
-            alpha += (1.0 - alpha) * c;
-        }
+        vec4 seg = cone_segment(sample_voxels(o + d * t, sdir, pc.lod), 0.5);
+        color += (1.0 - alpha) * seg.rgb;
+        alpha += (1.0 - alpha) * seg.a;
     }
     imageStore(out_radiance, px, vec4(color * grid.params.z, 1.0));  // volumes hold radiance * scale
 }

@@ -375,6 +375,11 @@ pub fn measure_renderer(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::
     let mut waits_before = r.scheduler().waits;
     for i in 0..total {
         if i == m.warmup {
+            // The warm-up frames finish before the first timed one starts: with frames in
+            // flight, the first timed frame would otherwise wait for them (the first frame of
+            // a renderer does the most work: static voxelization and, with bounce feedback,
+            // `gi.first_update_bounces`).
+            r.wait_idle()?;
             waits_before = r.scheduler().waits;
         }
         if m.dynamic_dt.is_some() {

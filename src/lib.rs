@@ -12,6 +12,7 @@ pub mod metrics;
 pub mod output;
 pub mod pareto;
 pub mod reference;
+pub mod regions;
 pub mod render;
 pub mod scene;
 pub mod soak;

@@ -76,6 +76,11 @@ pub fn rss_bytes() -> u64 {
         .unwrap_or(0)
 }
 
+/// With bounce feedback, the fixed-time image is rendered until what is left to converge is
+/// estimated below this (relative to the peak), or for `MAX_SETTLE_FRAMES` frames.
+const SETTLED: f32 = 1e-5;
+const MAX_SETTLE_FRAMES: u32 = 32;
+
 /// Largest per-pixel RGB difference relative to `reference`'s peak.
 fn drift(reference: &FrameOutput, image: &FrameOutput) -> f32 {
     let peak = reference.radiance.iter().fold(0.0f32, |m, v| m.max(v.abs())).max(1e-30);
@@ -99,11 +104,26 @@ pub fn soak_mode(
     let t0 = scene.settings.time;
     let options = RenderOptions { mode, frames_in_flight: o.frames_in_flight };
     let mut r = Renderer::with_options(ctx, scene.clone(), options)?;
-    // The fixed-time image: twice in a row, so async-lagged's one frame of lag has passed.
+    // The fixed-time image: twice in a row, so async-lagged's one frame of lag has passed;
+    // with bounce feedback (each update gathers the previous one's bounced light, so what ran
+    // before shows until it converges) until it has converged: the changes between frames
+    // shrink geometrically, by r, so what is left is about d r / (1 - r) after a change d.
+    let settle = if scene.settings.gi.bounce_feedback { MAX_SETTLE_FRAMES } else { 2 };
     let fixed = |r: &mut Renderer| -> crate::Result<FrameOutput> {
-        for _ in 0..2 {
+        let (mut last, mut last_change): (Option<FrameOutput>, f32) = (None, f32::INFINITY);
+        for _ in 0..settle {
             r.request_voxel_update();
             r.render(t0, true)?;
+            let out = r.output();
+            if let Some(l) = &last {
+                let change = drift(l, &out);
+                let rate = (change / last_change).min(0.99);
+                if last_change.is_finite() && change * rate / (1.0 - rate) <= SETTLED {
+                    return Ok(out);
+                }
+                last_change = change;
+            }
+            last = Some(out);
         }
         Ok(r.output())
     };

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::dvsgi;
+use common::{dvsgi, repo};
 use dvsgi::sweep::{Results, Row};
 use std::path::Path;
 use std::process::Output;
@@ -106,6 +106,71 @@ fn miniature_sweep_writes_rows_fronts_and_pictures_and_resumes() {
 
 fn write_exr(path: &Path, w: u32, h: u32, rgb: &[f32]) {
     dvsgi::output::write_exr(path, w, h, rgb).unwrap();
+}
+
+/// `compare --scene`: per-region figures from the scene's own surfaces, for the images as
+/// given and for the indirect light alone, with a picture of the signed ratio.
+#[test]
+fn compare_reports_error_per_region() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene_path = repo().join("scenes/cornell-box.toml");
+    let scene = dvsgi::scene::load(&scene_path, &Default::default()).unwrap();
+    let map = dvsgi::regions::RegionMap::trace(&scene, 16, 16);
+    let floor: Vec<bool> = map
+        .pixel
+        .iter()
+        .map(|&id| id != dvsgi::regions::BACKGROUND && map.surfaces[id as usize].mesh == "floor")
+        .collect();
+    assert!(floor.iter().filter(|&&f| f).count() >= 4, "the floor is in the 16x16 picture");
+    // Reference 2 everywhere (direct light 1, indirect 1); the test has half the indirect light
+    // on the floor and the right amount elsewhere.
+    let (t, r, d) = (dir.path().join("t.exr"), dir.path().join("r.exr"), dir.path().join("d.exr"));
+    write_exr(&r, 16, 16, &[2.0; 768]);
+    write_exr(&d, 16, 16, &[1.0; 768]);
+    let test: Vec<f32> = floor.iter().flat_map(|&f| [if f { 1.5 } else { 2.0 }; 3]).collect();
+    write_exr(&t, 16, 16, &test);
+    let (json, ratio) = (dir.path().join("c.json"), dir.path().join("ratio.png"));
+    let path = |p: &Path| p.to_str().unwrap().to_string();
+    let args = [
+        "compare".to_string(),
+        path(&t),
+        path(&r),
+        "--scene".into(),
+        "scenes/cornell-box.toml".into(),
+        "--ref-direct".into(),
+        path(&d),
+        "--ratio".into(),
+        path(&ratio),
+        "--json".into(),
+        path(&json),
+    ];
+    let o = ok(&dvsgi(&args.iter().map(|s| s.as_str()).collect::<Vec<_>>()));
+    assert!(o.contains("indirect light by region") && o.contains("box/floor +y"), "{o}");
+    let j: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let find = |list: &str, grouping: &str, name: &str| {
+        j[list].as_array().unwrap().iter().find(|s| s["grouping"] == grouping && s["name"] == name).unwrap()["ratio"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!((find("indirect", "mesh", "box/floor") - 0.5).abs() < 1e-6);
+    assert!((find("indirect", "mesh", "box/ceiling") - 1.0).abs() < 1e-6);
+    assert!((find("regions", "mesh", "box/floor") - 0.75).abs() < 1e-6);
+    assert!((find("regions", "material", "red") - 1.0).abs() < 1e-6);
+    assert!(j["rmse"].as_f64().unwrap() > 0.0, "the whole-image figures are still there");
+    let picture = image::open(&ratio).unwrap().to_rgb8();
+    assert_eq!(picture.dimensions(), (16, 16));
+    let i = floor.iter().position(|&f| f).unwrap() as u32;
+    assert_eq!(picture.get_pixel(i % 16, i / 16).0, [0, 0, 255], "one stop too dark is saturated blue");
+    // The direct light needs the scene; a direct image of another size is named.
+    let t2 = fails(&dvsgi(&["compare", &path(&t), &path(&r), "--ref-direct", &path(&d)]), 2);
+    assert!(t2.contains("--scene"), "{t2}");
+    let small = dir.path().join("small.exr");
+    write_exr(&small, 1, 1, &[1.0; 3]);
+    let t3 = fails(
+        &dvsgi(&["compare", &path(&t), &path(&r), "--scene", "scenes/cornell-box.toml", "--ref-direct", &path(&small)]),
+        1,
+    );
+    assert!(t3.contains("small.exr") && t3.contains("1x1"), "{t3}");
 }
 
 #[test]

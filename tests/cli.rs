@@ -116,7 +116,8 @@ fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
     {
         assert!(!out.contains(absent), "{absent} should not exist:\n{out}");
     }
-    // Cone tracing: six directional volumes with their mips, one bounce volume, the diffuse
+    // Cone tracing: six directional volumes with their mips, the bounced radiance (and the
+    // bounce's scratch volume), the diffuse
     // target; no upsample at full resolution.
     for present in ["voxel mips (voxel radiance)", "voxel bounce", "cone trace -> deferred lighting"] {
         assert!(out.contains(present), "{present} missing:\n{out}");

@@ -450,14 +450,46 @@ fn f16_volume(r: &mut Renderer, img: &std::sync::Arc<dvsgi::gpu::Image>, level: 
     halves.chunks_exact(4).map(|c| [c[0].to_f32(), c[1].to_f32(), c[2].to_f32(), c[3].to_f32()]).collect()
 }
 
+/// Optical depth of an opaque voxel (voxel.glsl's VOXEL_TAU).
+const VOXEL_TAU: f32 = 5.545177;
+
+/// Premultiplied (c, alpha) -> (L * tau, tau), as voxel.glsl's `tau_from_alpha`.
+fn tau_from_alpha(p: [f32; 4]) -> [f32; 4] {
+    let a = p[3].clamp(0.0, 1.0);
+    if a <= 0.0 {
+        return [0.0; 4];
+    }
+    let tau = (-(1.0 - a).max(1e-30).ln()).min(VOXEL_TAU);
+    [p[0].max(0.0) / a * tau, p[1].max(0.0) / a * tau, p[2].max(0.0) / a * tau, tau]
+}
+
+/// (L * tau, tau) -> premultiplied (c, alpha), as voxel.glsl's `alpha_from_tau`.
+fn alpha_from_tau(t: [f32; 4]) -> [f32; 4] {
+    let tau = t[3].max(0.0);
+    if tau <= 0.0 {
+        return [0.0; 4];
+    }
+    let a = 1.0 - (-tau).exp();
+    [t[0].max(0.0) / tau * a, t[1].max(0.0) / tau * a, t[2].max(0.0) / tau * a, a]
+}
+
 /// CPU reference of one directional level: for face f (+x, -x, +y, -y, +z, -z) each texel
 /// composites the front voxel of each of its four rows over the back one (premultiplied) and
-/// averages the rows. The result is rounded to half floats, as the GPU stores it.
-fn directional_level(src: &[[f32; 4]], n: u32, face: usize) -> Vec<[f32; 4]> {
+/// averages the rows, then stores (L * tau, tau). `src` is the full-resolution volume (already
+/// premultiplied) when `from_full`, else the level below in (L * tau, tau). The result is
+/// rounded to half floats, as the GPU stores it.
+fn directional_level(src: &[[f32; 4]], n: u32, face: usize, from_full: bool) -> Vec<[f32; 4]> {
     let m = n / 2;
     let axis = face / 2;
     let front_is_low = face % 2 == 0;
-    let at = |p: [u32; 3]| src[((p[2] * n + p[1]) * n + p[0]) as usize];
+    let at = |p: [u32; 3]| {
+        let v = src[((p[2] * n + p[1]) * n + p[0]) as usize];
+        if from_full {
+            v
+        } else {
+            alpha_from_tau(v)
+        }
+    };
     let mut out = Vec::with_capacity((m * m * m) as usize);
     for z in 0..m {
         for y in 0..m {
@@ -477,7 +509,7 @@ fn directional_level(src: &[[f32; 4]], n: u32, face: usize) -> Vec<[f32; 4]> {
                         }
                     }
                 }
-                out.push(acc.map(|a| half::f16::from_f32(a * 0.25).to_f32()));
+                out.push(tau_from_alpha(acc.map(|a| a * 0.25)).map(|a| half::f16::from_f32(a).to_f32()));
             }
         }
     }
@@ -517,7 +549,7 @@ fn anisotropic_mips_match_the_cpu_reference() {
         let mut below = full.clone();
         let mut n = RES;
         for level in 0..levels {
-            let expected = directional_level(&below, n, face);
+            let expected = directional_level(&below, n, face, level == 0);
             let got = f16_volume(&mut r, img, level);
             assert_eq!(got.len(), expected.len());
             for (i, (g, e)) in got.iter().zip(&expected).enumerate() {

@@ -12,6 +12,7 @@
 
 // The directional volumes at `level`, blended by the squared components of `dir` (the
 // direction the cone travels): the volume integrated along +x serves cones going +x.
+// Returns (L * tau, tau) (voxel.glsl).
 vec4 sample_anisotropic(vec3 uvw, vec3 dir, float level) {
     vec3 w = dir * dir;
     vec4 x = dir.x >= 0.0 ? textureLod(aniso[0], uvw, level) : textureLod(aniso[1], uvw, level);
@@ -21,18 +22,29 @@ vec4 sample_anisotropic(vec3 uvw, vec3 dir, float level) {
 }
 
 // Quadrilinear sample at voxel-space position g and level of detail `lod` (log2 of the
-// footprint in voxels): below 1 the full-resolution volume blends into the directional
+// texel size in voxels): below 1 the full-resolution volume blends into the directional
 // volumes' level 0 (which is lod 1); above, the directional mips blend trilinearly.
+// Returns (L * tau, tau): radiance weighted by optical depth across one texel.
 vec4 sample_voxels(vec3 g, vec3 dir, float lod) {
     vec3 uvw = g / float(grid.dims.x);
     float top = float(gi.counts.z);  // lod of the last directional level + 1
     lod = clamp(lod, 0.0, top);
     if (lod < 1.0) {
-        vec4 full = textureLod(vox_lod0, uvw, 0.0);
+        // Occupied full-resolution voxels (radiance L, alpha 1) have optical depth VOXEL_TAU.
+        vec4 full = textureLod(vox_lod0, uvw, 0.0) * VOXEL_TAU;
         if (lod <= 0.0) return full;
         return mix(full, sample_anisotropic(uvw, dir, 0.0), lod);
     }
     return sample_anisotropic(uvw, dir, lod - 1.0);
+}
+
+// What a path of `depth` texels through sample `smp` (L * tau, tau) adds: premultiplied
+// radiance and opacity (c, alpha).
+vec4 cone_segment(vec4 smp, float depth) {
+    float tau = max(smp.a, 0.0);
+    if (tau <= 0.0) return vec4(0.0);
+    float a = 1.0 - exp(-tau * depth);
+    return vec4(max(smp.rgb, vec3(0.0)) / tau * a, a);
 }
 
 struct ConeResult {
@@ -41,11 +53,41 @@ struct ConeResult {
     float occlusion;  // opacity weighted by f(r) = 1 / (1 + falloff r), for ambient occlusion
 };
 
-// March a cone from g (voxel units) along unit `dir` with half-aperture tangent `tan_half`
-// up to `max_t` voxels. Steps are `beta` times the cone diameter; each sample's opacity is
-// corrected for the step length (1 - (1 - a)^beta) so results do not depend on beta beyond
-// sampling error.
-ConeResult trace_cone(vec3 g, vec3 dir, float tan_half, float max_t) {
+// Where a cone starts: a surface point, its unit normal, and how far (in units of |n|_1)
+// the surface's own voxels may reach beyond that point along n: 0 for a point on the
+// surface, 0.5 for a voxel centre (the surface passes somewhere through the voxel).
+struct ConeOrigin {
+    vec3 p;  // voxel units
+    vec3 n;
+    float layer;
+};
+
+// Every sample of a texel of side s (voxels) filters texels whose centres lie within s of it
+// on each axis, and a texel holding any voxel of the origin's surface has its centre within
+// s/2 |n|_1 of the surface. A sample at height h above the surface (along n) therefore sees
+// none of the surface's own voxels while h >= (SELF_CLEARANCE s + layer) |n|_1.
+const float SELF_CLEARANCE = 1.5;
+
+// The largest texel side (a power of two, >= 1) a sample at height h may filter without
+// touching the origin's own voxels. A power of two, so the coarser level of a quadrilinear
+// blend obeys it too.
+float clear_texel(ConeOrigin o, float l1, float h) {
+    return exp2(floor(log2(max((h / l1 - o.layer) / SELF_CLEARANCE, 1.0))));
+}
+
+// March a cone from origin o along unit `dir` with half-aperture tangent `tan_half` up to
+// `max_t` voxels:
+// * It starts where a full-resolution sample clears the origin's own voxels (plus
+//   gi.start_offset), and each sample filters texels of side s = half the cone's diameter
+//   (a trilinear texel of side s spreads over the same variance, s^2/4 per axis, as the
+//   cone's disc of diameter 2s), but never more than `clear_texel` allows: near the surface
+//   a wide cone samples a narrower footprint rather than its own surface. So no sample sees
+//   the surface it starts from, at any resolution.
+// * Steps are gi.step (beta) times the diameter, i.e. 2 beta texels; optical depth is summed
+//   over each step (voxel.glsl), so nothing leaks through walls between samples.
+// * It ends at max_t, when opaque, or when its filter footprint has left the grid (which is
+//   transparent outside: what lies beyond is not known, and nothing there emits).
+ConeResult trace_cone(ConeOrigin o, vec3 dir, float tan_half, float max_t) {
     ConeResult r;
     r.radiance = vec3(0.0);
     r.opacity = 0.0;
@@ -55,21 +97,24 @@ ConeResult trace_cone(vec3 g, vec3 dir, float tan_half, float max_t) {
     float falloff = gi.trace.w;
     tan_half = clamp(tan_half, 1e-4, 20.0);
     max_t = min(max_t, gi.trace.y);
+    float l1 = abs(o.n.x) + abs(o.n.y) + abs(o.n.z);
+    float h0 = l1 * (SELF_CLEARANCE + o.layer) + gi.trace.z;
+    vec3 g = o.p + o.n * h0;
+    float rise = dot(dir, o.n);  // height gained per voxel along the cone
     float t = 0.0;
-    for (int i = 0; i < 2048 && t < max_t && r.opacity < 0.99; ++i) {
+    for (int i = 0; i < 1024 && t < max_t && r.opacity < 0.995; ++i) {
         vec3 p = g + dir * t;
-        if (any(lessThan(p, vec3(0.0))) || any(greaterThan(p, vec3(res)))) break;
-        float diameter = max(1.0, 2.0 * tan_half * t);
-        vec4 s = sample_voxels(p, dir, log2(diameter));
-        float a = clamp(s.a, 0.0, 1.0);
-        if (a > 0.0) {
-            float corrected = 1.0 - pow(1.0 - min(a, 0.9999), beta);
-            vec3 rgb = max(s.rgb, vec3(0.0)) * (corrected / a);
-            r.radiance += (1.0 - r.opacity) * rgb;
-            r.occlusion += (1.0 - r.occlusion) * corrected / (1.0 + falloff * t);
-            r.opacity += (1.0 - r.opacity) * corrected;
+        float s = max(1.0, tan_half * t);
+        if (any(lessThan(p, vec3(-1.5 * s))) || any(greaterThan(p, vec3(res + 1.5 * s)))) break;
+        s = min(s, clear_texel(o, l1, h0 + t * max(rise, 0.0)));
+        float step_len = 2.0 * beta * s;
+        vec4 seg = cone_segment(sample_voxels(p, dir, log2(s)), step_len / s);
+        if (seg.a > 0.0) {
+            r.radiance += (1.0 - r.opacity) * seg.rgb;
+            r.occlusion += (1.0 - r.occlusion) * seg.a / (1.0 + falloff * t);
+            r.opacity += (1.0 - r.opacity) * seg.a;
         }
-        t += beta * diameter;
+        t += step_len;
     }
     r.radiance = min(r.radiance, vec3(HALF_MAX));
     return r;
@@ -85,15 +130,15 @@ mat3 tangent_frame(vec3 n) {
     return mat3(t, bt, n);
 }
 
-// Diffuse cones over the hemisphere of unit N from voxel-space position g: the cosine-weighted
+// Diffuse cones over the hemisphere of the origin's normal: the cosine-weighted
 // mean incoming radiance (irradiance / pi) in rgb and the AO factor (1 = unoccluded) in a.
-vec4 trace_diffuse(vec3 g, vec3 N) {
-    mat3 tbn = tangent_frame(N);
+vec4 trace_diffuse(ConeOrigin o) {
+    mat3 tbn = tangent_frame(o.n);
     vec3 sum = vec3(0.0);
     float occlusion = 0.0;
     for (uint i = 0u; i < gi.counts.x; ++i) {
         vec3 d = normalize(tbn * gi.cones[i].xyz);
-        ConeResult c = trace_cone(g, d, gi.cone_tan[i].x, 1e30);
+        ConeResult c = trace_cone(o, d, gi.cone_tan[i].x, 1e30);
         sum += gi.cones[i].w * c.radiance;
         occlusion += gi.cones[i].w * c.occlusion;
     }

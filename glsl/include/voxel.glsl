@@ -9,6 +9,29 @@ struct VoxelGrid {
                      // y radiance scale: radiance volumes hold radiance * y; z = 1/y
 };
 
+// Opacity in the cone-traced volumes is kept as optical depth: a directional texel holds
+// (L * tau, tau), the optical depth tau across the texel along its axis and the radiance L
+// weighted by it. Optical depth adds along a path and is linear under filtering, so a thin
+// opaque wall stays opaque however the trilinear weights of successive cone samples split it
+// (interpolating opacity instead lets ~1/6 of the light through every wall). An occupied
+// full-resolution voxel is opaque: optical depth VOXEL_TAU (transmittance 1/256).
+const float VOXEL_TAU = 5.545177;  // ln(256)
+
+// Premultiplied (c, alpha) -> (L * tau, tau), and back.
+vec4 tau_from_alpha(vec4 premultiplied) {
+    float a = clamp(premultiplied.a, 0.0, 1.0);
+    if (a <= 0.0) return vec4(0.0);
+    float tau = min(-log(max(1.0 - a, 1e-30)), VOXEL_TAU);
+    return vec4(max(premultiplied.rgb, vec3(0.0)) / a * tau, tau);
+}
+
+vec4 alpha_from_tau(vec4 texel) {
+    float tau = max(texel.a, 0.0);
+    if (tau <= 0.0) return vec4(0.0);
+    float a = 1.0 - exp(-tau);
+    return vec4(max(texel.rgb, vec3(0.0)) / tau * a, a);
+}
+
 // Voxel volumes store RGB in 8 bits each plus an 8-bit sample count (R32_UINT, for atomics).
 uint pack_rgb_count(vec3 rgb255, float count) {
     uvec4 b = uvec4(clamp(round(vec4(rgb255, count)), 0.0, 255.0));

@@ -105,6 +105,23 @@ enum Command {
         /// Also write the figures as JSON.
         #[arg(long)]
         json: Option<PathBuf>,
+        /// The scene both images show (with the same --set/--preset and image size): report
+        /// the error per region (object, mesh, material, and mesh × facing).
+        #[arg(long)]
+        scene: Option<PathBuf>,
+        /// The reference's direct light alone (`dvsgi reference --bounces 0`): also report the
+        /// indirect light (reference − this) per region. Needs --scene.
+        #[arg(long, requires = "scene")]
+        ref_direct: Option<PathBuf>,
+        /// The test image's indirect light (`dvsgi render --view indirect`); without it the
+        /// test's indirect light is TEST − the reference's direct light.
+        #[arg(long, requires = "ref_direct")]
+        test_indirect: Option<PathBuf>,
+        /// Write a picture of log2(test / reference) per pixel (of the indirect light when
+        /// --ref-direct is given): blue too dark, white right, red too bright, saturating at
+        /// one stop. Needs --scene.
+        #[arg(long, requires = "scene")]
+        ratio: Option<PathBuf>,
     },
     /// The speed/accuracy sweep: render a grid of cone-tracing settings, time each, compare it
     /// with the path-traced reference, mark the Pareto-optimal ones and draw the frontier.
@@ -179,8 +196,20 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> dvsgi::Result<()> {
     match cli.command {
         Command::Info { scene } => info(&cli.common, scene),
-        Command::Compare { test, reference, diff, exposure, tonemap, json } => {
-            compare(&test, &reference, diff.as_deref(), exposure, &tonemap, json.as_deref())
+        Command::Compare {
+            test,
+            reference,
+            diff,
+            exposure,
+            tonemap,
+            json,
+            scene,
+            ref_direct,
+            test_indirect,
+            ratio,
+        } => {
+            let regions = scene.map(|scene| RegionArgs { scene, ref_direct, test_indirect, ratio });
+            compare(&cli.common, &test, &reference, diff.as_deref(), exposure, &tonemap, json.as_deref(), regions)
         }
         Command::Sweep { scene, out, grid, spp, frames, warmup, schedule, size } => {
             let grid =
@@ -249,13 +278,33 @@ fn run(cli: Cli) -> dvsgi::Result<()> {
     }
 }
 
+/// `compare --scene`: where the regions come from and what else to report.
+struct RegionArgs {
+    scene: PathBuf,
+    ref_direct: Option<PathBuf>,
+    test_indirect: Option<PathBuf>,
+    ratio: Option<PathBuf>,
+}
+
+/// What `compare --json` writes: the whole-image figures, and the regions when asked for.
+#[derive(serde::Serialize)]
+struct CompareJson {
+    #[serde(flatten)]
+    comparison: dvsgi::metrics::Comparison,
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    regions: Option<dvsgi::regions::RegionReport>,
+}
+
+#[allow(clippy::too_many_arguments)]
 fn compare(
+    common: &CommonArgs,
     test: &std::path::Path,
     reference: &std::path::Path,
     diff: Option<&std::path::Path>,
     exposure: f32,
     tonemap: &str,
     json: Option<&std::path::Path>,
+    regions: Option<RegionArgs>,
 ) -> dvsgi::Result<()> {
     use dvsgi::metrics::{compare_files, flip_error_map, LinearImage};
     let tonemap: dvsgi::scene::ToneMap = serde_json::from_value(serde_json::Value::String(tonemap.to_string()))
@@ -263,15 +312,36 @@ fn compare(
     if !exposure.is_finite() {
         return Err(dvsgi::Error::Usage(format!("--exposure {exposure} is not a finite number")));
     }
-    for out in diff.iter().chain(json.iter()) {
+    let ratio = regions.as_ref().and_then(|r| r.ratio.as_deref());
+    for out in diff.iter().chain(json.iter()).chain(ratio.iter()) {
         dvsgi::output::check_target_dir(out)?;
     }
-    if let Some(d) = diff {
-        if dvsgi::output::format_of(d)? != dvsgi::output::Format::Png {
-            return Err(dvsgi::Error::Usage(format!("{}: the error map is a picture; give a .png name", d.display())));
+    for picture in diff.iter().chain(ratio.iter()) {
+        if dvsgi::output::format_of(picture)? != dvsgi::output::Format::Png {
+            return Err(dvsgi::Error::Usage(format!("{}: this is a picture; give a .png name", picture.display())));
         }
     }
     let c = compare_files(test, reference, exposure, tonemap)?;
+    print_comparison(test, reference, &c);
+    let region_report = match &regions {
+        Some(r) => Some(compare_regions(common, test, reference, r)?),
+        None => None,
+    };
+    if let Some(d) = diff {
+        let t = LinearImage::read_exr(test)?;
+        let r = LinearImage::read_exr(reference)?;
+        dvsgi::output::write_png(d, &flip_error_map(&t, &r, exposure, tonemap)?)?;
+        println!("wrote {}", d.display());
+    }
+    if let Some(j) = json {
+        let text = serde_json::to_string_pretty(&CompareJson { comparison: c, regions: region_report }).expect("JSON");
+        dvsgi::output::write_bytes(j, text.as_bytes())?;
+        println!("wrote {}", j.display());
+    }
+    Ok(())
+}
+
+fn print_comparison(test: &std::path::Path, reference: &std::path::Path, c: &dvsgi::metrics::Comparison) {
     println!("{} against {} ({} pixels)", test.display(), reference.display(), c.pixels);
     println!("  RMSE   {:.6} (linear radiance)", c.rmse);
     println!("  relMSE {:.6} (linear radiance, epsilon {})", c.relmse, dvsgi::metrics::RELMSE_EPSILON);
@@ -290,18 +360,82 @@ fn compare(
     row("FLIP", &c.flip);
     row("SSIM", &c.ssim);
     println!("  (FLIP: 0 = identical, lower is better; SSIM: 1 = identical, higher is better)");
-    if let Some(d) = diff {
-        let t = LinearImage::read_exr(test)?;
-        let r = LinearImage::read_exr(reference)?;
-        dvsgi::output::write_png(d, &flip_error_map(&t, &r, exposure, tonemap)?)?;
-        println!("wrote {}", d.display());
+}
+
+/// The per-region part of `compare`: label the pixels from the scene, report, draw the ratio.
+fn compare_regions(
+    common: &CommonArgs,
+    test: &std::path::Path,
+    reference: &std::path::Path,
+    args: &RegionArgs,
+) -> dvsgi::Result<dvsgi::regions::RegionReport> {
+    use dvsgi::metrics::LinearImage;
+    use dvsgi::regions::{indirect_pair, ratio_picture, region_stats, Pair, RegionMap, RegionReport};
+    let t = LinearImage::read_exr(test)?;
+    let t_size = (t.width, t.height);
+    let read = |p: &std::path::Path, what: &str| -> dvsgi::Result<LinearImage> {
+        let img = LinearImage::read_exr(p)?;
+        if (img.width, img.height) != (t_size.0, t_size.1) {
+            return Err(dvsgi::Error::Usage(format!(
+                "{}: {what} is {}x{} but the test image is {}x{}",
+                p.display(),
+                img.width,
+                img.height,
+                t_size.0,
+                t_size.1
+            )));
+        }
+        Ok(img)
+    };
+    let r = read(reference, "the reference")?;
+    let var_path = dvsgi::reference::variance_path(reference);
+    let var = if var_path.is_file() { Some(read(&var_path, "the reference's variance")?) } else { None };
+    let size =
+        vec![("render.width".to_string(), t.width.to_string()), ("render.height".to_string(), t.height.to_string())];
+    let scene = common.load_scene(&args.scene, &size)?;
+    let map = RegionMap::trace(&scene, t.width, t.height);
+    let regions = region_stats(&map, &Pair { test: &t, reference: &r, reference_variance: var.as_ref() });
+    print_regions("regions (test / reference mean radiance)", &regions);
+    let mut picture = (t.clone(), r.clone());
+    let indirect = match &args.ref_direct {
+        Some(rd) => {
+            let rd = read(rd, "the reference's direct light")?;
+            let ti = args.test_indirect.as_deref().map(|p| read(p, "the test's indirect light")).transpose()?;
+            let (ti, ri) = indirect_pair(&t, &r, &rd, ti.as_ref());
+            let stats = region_stats(&map, &Pair { test: &ti, reference: &ri, reference_variance: var.as_ref() });
+            print_regions("indirect light by region (test / reference)", &stats);
+            picture = (ti, ri);
+            Some(stats)
+        }
+        None => None,
+    };
+    if let Some(p) = &args.ratio {
+        dvsgi::output::write_png(p, &ratio_picture(&map, &picture.0, &picture.1, 1.0))?;
+        println!("wrote {}", p.display());
     }
-    if let Some(j) = json {
-        let text = serde_json::to_string_pretty(&c).expect("JSON");
-        dvsgi::output::write_bytes(j, text.as_bytes())?;
-        println!("wrote {}", j.display());
+    Ok(RegionReport { regions, indirect })
+}
+
+fn print_regions(title: &str, stats: &[dvsgi::regions::RegionStats]) {
+    println!("{title}:");
+    println!(
+        "  {:<9} {:<34} {:>7} {:>8} {:>8} {:>9} {:>9}",
+        "grouping", "region", "pixels", "ratio", "±noise", "relMSE", "RMSE"
+    );
+    for s in stats {
+        let noise = s.ratio_noise.map(|n| format!("{n:.4}")).unwrap_or_else(|| "-".into());
+        println!(
+            "  {:<9} {:<34} {:>7} {:>8.4} {:>8} {:>9.5} {:>9.5}{}",
+            format!("{:?}", s.grouping).to_lowercase(),
+            s.name,
+            s.pixels,
+            s.ratio,
+            noise,
+            s.relmse,
+            s.rmse,
+            if s.small { "  (few pixels)" } else { "" }
+        );
     }
-    Ok(())
 }
 
 fn print_sweep(results: &dvsgi::sweep::Results) {

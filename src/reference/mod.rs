@@ -129,13 +129,21 @@ pub struct Triangles {
     pub corners: Vec<[Vec3; 3]>,
     normals: Vec<[Vec3; 3]>,
     uvs: Vec<[Vec2; 3]>,
-    materials: Vec<u32>,
+    pub materials: Vec<u32>,
+    /// (object, mesh) index of each triangle in the scene.
+    pub sources: Vec<[u32; 2]>,
 }
 
 impl Triangles {
     pub fn of(scene: &Scene, t: f32) -> Triangles {
-        let mut out = Triangles { corners: Vec::new(), normals: Vec::new(), uvs: Vec::new(), materials: Vec::new() };
-        for object in &scene.objects {
+        let mut out = Triangles {
+            corners: Vec::new(),
+            normals: Vec::new(),
+            uvs: Vec::new(),
+            materials: Vec::new(),
+            sources: Vec::new(),
+        };
+        for (oi, object) in scene.objects.iter().enumerate() {
             let m = object.model_matrix(t);
             let nm = Mat3::from_mat4(m).inverse().transpose();
             for &mi in &object.meshes {
@@ -146,6 +154,7 @@ impl Triangles {
                     out.normals.push(idx.map(|i| nm * mesh.normals.get(i).copied().unwrap_or(Vec3::ZERO)));
                     out.uvs.push(idx.map(|i| mesh.uvs.get(i).copied().unwrap_or(Vec2::ZERO)));
                     out.materials.push(mesh.material);
+                    out.sources.push([oi as u32, mi]);
                 }
             }
         }

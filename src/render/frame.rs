@@ -9,7 +9,7 @@ use super::passes::readback::ReadbackPasses;
 use super::passes::shadow::ShadowPass;
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::upload::UploadPass;
-use super::passes::voxel_bounce::VoxelBouncePass;
+use super::passes::voxel_bounce::{BounceCopyPass, VoxelBouncePass};
 use super::passes::voxel_clear::{DynamicClearPass, VoxelClearPass};
 use super::passes::voxel_light::VoxelLightPass;
 use super::passes::voxel_mips::{VoxelMipPass, VoxelMips};
@@ -33,19 +33,20 @@ pub struct VoxelPasses {
     pub light: VoxelLightPass,
     /// Directional mips of the direct radiance; only when cones are traced.
     pub mips: Option<VoxelMipPass>,
-    /// The distinct bounce steps, each a bounce and the mips of its result: direct -> a,
-    /// a -> b, b -> a (as many as the bounce count needs). Bounce i runs step
-    /// [`bounce_step`]`(i)`.
-    pub bounces: Vec<(VoxelBouncePass, VoxelMipPass)>,
+    /// Only with bounces.
+    pub bounces: Option<BouncePasses>,
 }
 
-/// The step that performs bounce `i` (see [`VoxelPasses::bounces`]).
-pub fn bounce_step(i: u32) -> usize {
-    match i {
-        0 => 0,
-        i if i % 2 == 1 => 1,
-        _ => 2,
-    }
+/// The passes of a bounce step: a bounce into the scratch volume, its copy into the bounced
+/// radiance and the directional mips of that.
+pub struct BouncePasses {
+    /// Gathers the direct light: the first bounce of an update that starts afresh.
+    pub from_direct: VoxelBouncePass,
+    /// Gathers the bounced radiance: every later bounce, and with `gi.bounce_feedback` the
+    /// first bounce of every update after the first, so bounces accumulate over updates.
+    pub from_bounced: VoxelBouncePass,
+    pub copy: BounceCopyPass,
+    pub mips: VoxelMipPass,
 }
 
 /// Per-pixel cone tracing (and the upsample when tracing at reduced resolution).
@@ -94,6 +95,11 @@ pub struct FrameState {
     /// `async-lagged`: trace cones through the voxel radiance of the previous update and
     /// relight the voxels after the trace (only once a previous update exists).
     pub lagged: bool,
+    /// Bounce steps this update runs (when it relights and the scene has bounces).
+    pub bounces: u32,
+    /// The first bounce gathers the bounced radiance of the previous update (feedback) rather
+    /// than this update's direct light.
+    pub feed_back: bool,
 }
 
 pub const RADIANCE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -146,19 +152,20 @@ impl FramePasses {
             };
             let (mips, bounces) = if volumes.needs.cones {
                 let shared = VoxelMips::new(ctx, &volumes)?;
-                let n = volumes.needs.bounces;
-                let steps = (0..n.min(3))
-                    .map(|i| {
-                        let (src, dst) = volumes.bounce_volumes(i);
-                        Ok((
-                            VoxelBouncePass::new(ctx, &volumes, src, dst)?,
-                            VoxelMipPass::new(ctx, &shared, &volumes, dst)?,
-                        ))
+                let bounces = if volumes.needs.bounces > 0 {
+                    let bounced = &volumes.bounced[0];
+                    Some(BouncePasses {
+                        from_direct: VoxelBouncePass::new(ctx, &volumes, &volumes.radiance)?,
+                        from_bounced: VoxelBouncePass::new(ctx, &volumes, bounced)?,
+                        copy: BounceCopyPass::new(&volumes),
+                        mips: VoxelMipPass::new(ctx, &shared, &volumes, bounced)?,
                     })
-                    .collect::<GpuResult<Vec<_>>>()?;
-                (Some(VoxelMipPass::new(ctx, &shared, &volumes, &volumes.radiance)?), steps)
+                } else {
+                    None
+                };
+                (Some(VoxelMipPass::new(ctx, &shared, &volumes, &volumes.radiance)?), bounces)
             } else {
-                (None, Vec::new())
+                (None, None)
             };
             Some(VoxelPasses {
                 light: VoxelLightPass::new(ctx, frame, &volumes, &atlas, &s.gi)?,
@@ -313,13 +320,18 @@ impl FramePasses {
         let mut voxel_lighting: Vec<&dyn Pass> = Vec::new();
         if let (true, Some(v)) = (relight, &self.voxels) {
             voxel_lighting.push(&v.light);
-            if let Some(mips) = &v.mips {
+            let feed_back = state.feed_back && v.bounces.is_some();
+            // Feedback gathers through the mips of the previous bounced radiance, still in
+            // the directional volumes.
+            if let (false, Some(mips)) = (feed_back, &v.mips) {
                 voxel_lighting.push(mips);
             }
-            for i in 0..v.volumes.needs.bounces {
-                let (bounce, mips) = &v.bounces[bounce_step(i)];
-                voxel_lighting.push(bounce);
-                voxel_lighting.push(mips);
+            if let Some(b) = &v.bounces {
+                for i in 0..state.bounces {
+                    voxel_lighting.push(if i == 0 && !feed_back { &b.from_direct } else { &b.from_bounced });
+                    voxel_lighting.push(&b.copy);
+                    voxel_lighting.push(&b.mips);
+                }
             }
         }
         // Lagged: this frame's cones read the radiance of the previous update, and the new

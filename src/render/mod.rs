@@ -214,12 +214,21 @@ impl Renderer {
         // The update policy: every `update_interval` frames (0: only on request).
         let interval = self.scene.settings.gi.update_interval as u64;
         let due = self.update_requested || (interval > 0 && self.frame_index % interval == 0);
+        let gi = &self.scene.settings.gi;
+        // The first update has nothing to feed back: it runs enough bounces to converge.
+        let feed_back = gi.bounce_feedback && self.static_voxelized;
+        let bounces = match (gi.bounce_feedback, self.static_voxelized) {
+            (true, false) => gi.bounces.max(gi.first_update_bounces),
+            _ => gi.bounces,
+        };
         FrameState {
             static_voxelized: self.static_voxelized,
             revoxelize: due,
             relight: due || self.lights_changed,
             readback,
             lagged: self.scheduler.mode() == Mode::AsyncLagged,
+            bounces,
+            feed_back,
         }
     }
 

@@ -95,7 +95,9 @@ pub struct VoxelVolumes {
     pub flags: Option<Arc<Image>>,
     /// Outgoing radiance of the lit voxels, direct light and emission (RGBA16F, alpha = occupancy).
     pub radiance: Arc<Image>,
-    /// Radiance after each bounce, ping-ponged (none without bounces, one for a single bounce).
+    /// With bounces: the radiance with bounced light (the final radiance), and the scratch
+    /// volume each bounce writes before it is copied into the first (a bounce samples the
+    /// previous result while it runs). Empty without bounces.
     pub bounced: Vec<Arc<Image>>,
     /// The six directional volumes (+x, -x, +y, -y, +z, -z) at half resolution with full mip
     /// chains, built from the final radiance; only when cones are traced.
@@ -111,6 +113,8 @@ pub struct VoxelVolumes {
     /// The radiance, bounce and directional volumes hold radiance times this
     /// (`lights::radiance_scale`).
     pub radiance_scale: f32,
+    /// `gi.diffuse_rays`: the per-pixel tracer gathers with rays instead of cones (> 0).
+    pub diffuse_rays: u32,
 }
 
 impl VoxelVolumes {
@@ -144,16 +148,20 @@ impl VoxelVolumes {
         } else {
             Vec::new()
         };
-        let bounced = (0..needs.bounces.min(2))
-            .map(|i| {
-                Image::new(ctx, &format!("voxel radiance bounce {}", ["a", "b"][i as usize]), {
-                    ImageDesc::d3(RADIANCE_VOLUME_FORMAT, res, 1, sampled)
-                })
-                .map(Arc::new)
-            })
-            .collect::<GpuResult<Vec<_>>>()?;
-        let gi_params =
-            Buffer::uniform(ctx, "gi params", &GpuGiParams::new(&scene.settings.gi, res, grid.voxel_size, mip_levels))?;
+        // The bounced radiance and the scratch volume each bounce writes before it is copied in.
+        let bounced = if needs.bounces > 0 {
+            ["voxel radiance bounced", "voxel bounce scratch"]
+                .iter()
+                .map(|name| Image::new(ctx, name, ImageDesc::d3(RADIANCE_VOLUME_FORMAT, res, 1, sampled)).map(Arc::new))
+                .collect::<GpuResult<Vec<_>>>()?
+        } else {
+            Vec::new()
+        };
+        // `--view ao` shows the occlusion whether or not it darkens the final image.
+        let mut gi = scene.settings.gi.clone();
+        gi.ao |= scene.settings.view == View::Ao;
+        let gi_params = Buffer::uniform(ctx, "gi params", &GpuGiParams::new(&gi, res, grid.voxel_size, mip_levels))?;
+        let addr = vk::SamplerAddressMode::CLAMP_TO_BORDER;
         let sampler = Sampler::new(
             ctx,
             "voxel volume sampler",
@@ -161,9 +169,9 @@ impl VoxelVolumes {
                 .mag_filter(vk::Filter::LINEAR)
                 .min_filter(vk::Filter::LINEAR)
                 .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
-                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_BORDER)
-                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_BORDER)
-                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_BORDER)
+                .address_mode_u(addr)
+                .address_mode_v(addr)
+                .address_mode_w(addr)
                 .border_color(vk::BorderColor::FLOAT_TRANSPARENT_BLACK)
                 .max_lod(mip_levels as f32),
         )?;
@@ -200,6 +208,7 @@ impl VoxelVolumes {
                 .transpose()?,
             emission_scale,
             radiance_scale,
+            diffuse_rays: scene.settings.gi.diffuse_rays,
         })
     }
 
@@ -214,19 +223,10 @@ impl VoxelVolumes {
         v
     }
 
-    /// The radiance volume after the last bounce (the one the directional volumes are built
-    /// from and the tracer samples at full resolution).
+    /// The radiance volume the cones sample: with bounces the bounced radiance, else the
+    /// direct radiance. The directional volumes are built from it.
     pub fn final_radiance(&self) -> &Arc<Image> {
-        match self.needs.bounces {
-            0 => &self.radiance,
-            n => &self.bounced[((n - 1) % 2) as usize],
-        }
-    }
-
-    /// Bounce `i` (0-based): (volume it samples, volume it writes).
-    pub fn bounce_volumes(&self, i: u32) -> (&Arc<Image>, &Arc<Image>) {
-        let src = if i == 0 { &self.radiance } else { &self.bounced[((i - 1) % 2) as usize] };
-        (src, &self.bounced[(i % 2) as usize])
+        self.bounced.first().unwrap_or(&self.radiance)
     }
 
     /// Uses of the averaged volumes (albedo, normal, emission) by a pass that writes them with

@@ -15,21 +15,22 @@ pub enum Preset {
 impl Preset {
     /// The `[gi]` overrides, as (dotted key, TOML value).
     pub fn overrides(self) -> Vec<(String, String)> {
-        // (cones, aperture, bounces): all at 32^3 voxels, step 1, downsample 2, AO off, which
-        // every measured front preferred (ACCURACY.md).
-        let (cones, aperture, bounces) = match self {
-            Preset::Low => ("4", "0", "0"),
-            Preset::Medium => ("9", "0", "0"),
-            Preset::High => ("4", "60", "1"),
-            Preset::Ultra => ("9", "0", "1"),
+        // (voxels, cones, bounces, downsample): points of the FLIP fronts of the Cornell box
+        // and Sponza on lavapipe (ACCURACY.md); `ultra` is the scene-file default. Step 0.5,
+        // automatic apertures, AO off everywhere.
+        let (voxels, cones, bounces, downsample) = match self {
+            Preset::Low => ("32", "9", "0", "2"),
+            Preset::Medium => ("32", "9", "1", "2"),
+            Preset::High => ("64", "9", "1", "2"),
+            Preset::Ultra => ("128", "9", "1", "1"),
         };
         let values: [(&str, &str); 7] = [
-            ("voxel_resolution", "32"),
+            ("voxel_resolution", voxels),
             ("diffuse_cones", cones),
-            ("diffuse_cone_angle", aperture),
-            ("step", "1"),
+            ("diffuse_cone_angle", "0"),
+            ("step", "0.5"),
             ("bounces", bounces),
-            ("downsample", "2"),
+            ("downsample", downsample),
             ("ao", "false"),
         ];
         let mut out = vec![("gi.mode".to_string(), "\"vct\"".to_string())];
@@ -45,7 +46,7 @@ mod tests {
 
     #[test]
     fn every_preset_is_a_valid_gi_table_and_they_rise_in_cost() {
-        let mut last = (0, 0);
+        let mut last = (0, 0, 0, 0);
         for p in Preset::value_variants() {
             let mut table = toml::Table::new();
             for (k, v) in p.overrides() {
@@ -55,10 +56,19 @@ mod tests {
             }
             let gi: crate::scene::GiSettings = table.try_into().expect("preset keys are [gi] keys");
             gi.validate().unwrap_or_else(|(k, m)| panic!("{p:?}: gi.{k}: {m}"));
-            // Each level costs more: more bounces, or as many and more cones.
-            let cost = (gi.bounces, gi.diffuse_cones);
+            // Each level costs more: more bounces, or as many on more voxels or with more cones
+            // or at full resolution.
+            let cost = (gi.bounces, gi.voxel_resolution, gi.diffuse_cones, 8 - gi.downsample);
             assert!(cost > last, "{p:?}");
             last = cost;
+            if *p == Preset::Ultra {
+                let d = crate::scene::GiSettings::default();
+                assert_eq!(
+                    (gi.voxel_resolution, gi.diffuse_cones, gi.bounces, gi.downsample, gi.step, gi.ao),
+                    (d.voxel_resolution, d.diffuse_cones, d.bounces, d.downsample, d.step, d.ao),
+                    "ultra is the scene-file default"
+                );
+            }
         }
     }
 }

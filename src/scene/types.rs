@@ -380,17 +380,31 @@ pub struct GiSettings {
     pub occlusion: VoxelOcclusion,
     /// Ray-marched shadows only: 0 = hard; larger values soften with distance (nu accumulation).
     pub voxel_shadow_softness: f32,
-    /// Extra light bounces by per-voxel cone tracing (0 = direct light in the voxels only).
+    /// Light bounces by per-voxel cone tracing in each voxel update (0 = direct light in the
+    /// voxels only).
     pub bounces: u32,
+    /// Each update's first bounce gathers the previous update's bounced light instead of the
+    /// direct light alone, so bounces accumulate over updates (N updates give N × `bounces`).
+    pub bounce_feedback: bool,
+    /// With feedback, the bounces of the first update (when there is nothing to feed back),
+    /// so that a single frame is already converged; at least `bounces`.
+    pub first_update_bounces: u32,
     /// Diffuse cones per pixel (and per voxel in bounces): one of [`DIFFUSE_CONE_COUNTS`].
     pub diffuse_cones: u32,
+    /// Diagnostic: gather each pixel's diffuse light with this many cosine-distributed rays
+    /// through the full-resolution voxels (exact for the voxelized scene, noisy) instead of
+    /// the diffuse cones; 0 = cones. Separates the voxels' error from the cones'.
+    pub diffuse_rays: u32,
     /// Full aperture of each diffuse cone in degrees; 0 = automatic (each cone spans the solid
     /// angle of its share of the hemisphere).
     pub diffuse_cone_angle: f32,
     /// Trace a specular cone (only where some material has a specular colour).
     pub specular: bool,
-    /// Ambient occlusion from the diffuse cones, weighted by f(r) = 1 / (1 + falloff r) with r
-    /// in units of the voxel grid's side; multiplies the indirect light.
+    /// Multiply the cone-traced indirect light by the diffuse cones' ambient occlusion, as many
+    /// engines do. Off by default: the cones' front-to-back compositing already occludes the
+    /// light they gather, so this counts occlusion twice (ACCURACY.md measures what it costs).
+    /// `--view ao` shows the factor whatever this says. Occlusion is weighted by
+    /// f(r) = 1 / (1 + falloff r), r in units of the voxel grid's side.
     pub ao: bool,
     pub ao_falloff: f32,
     /// How direct light is shadowed.
@@ -401,7 +415,8 @@ pub struct GiSettings {
     pub step: f32,
     /// Longest cone in world units; 0 = the grid's diagonal.
     pub max_distance: f32,
-    /// Cones start this many voxels off the surface along its normal (against self-illumination).
+    /// Extra distance (voxels) cones start off the surface, beyond the clearance that already
+    /// keeps every cone sample off the surface's own voxels.
     pub start_offset: f32,
     /// Trace at 1/downsample of the image resolution, then upsample (depth- and normal-aware).
     pub downsample: u32,
@@ -418,16 +433,19 @@ impl Default for GiSettings {
             occlusion: VoxelOcclusion::ShadowMap,
             voxel_shadow_softness: 0.0,
             bounces: 1,
-            diffuse_cones: 6,
+            bounce_feedback: true,
+            first_update_bounces: 4,
+            diffuse_cones: 9,
+            diffuse_rays: 0,
             diffuse_cone_angle: 0.0,
             specular: true,
-            ao: true,
+            ao: false,
             ao_falloff: 4.0,
             shadows: DirectShadows::ShadowMap,
             shadow_cone_angle: 6.0,
             step: 0.5,
             max_distance: 0.0,
-            start_offset: 1.5,
+            start_offset: 0.0,
             downsample: 1,
             update_interval: 1,
         }
@@ -460,6 +478,12 @@ impl GiSettings {
         }
         if self.bounces > 16 {
             return Err(("bounces", format!("{} is not in 0..=16", self.bounces)));
+        }
+        if self.first_update_bounces > 16 {
+            return Err(("first_update_bounces", format!("{} is not in 0..=16", self.first_update_bounces)));
+        }
+        if self.diffuse_rays > 64 {
+            return Err(("diffuse_rays", format!("{} is not in 0..=64", self.diffuse_rays)));
         }
         if !DIFFUSE_CONE_COUNTS.contains(&self.diffuse_cones) {
             return Err(("diffuse_cones", format!("{} is not one of {DIFFUSE_CONE_COUNTS:?}", self.diffuse_cones)));

@@ -135,7 +135,11 @@ impl GiTracePass {
             shaders::GI_TRACE_COMP,
             &[set.layout],
             0,
-            &[(0, u32::from(targets.specular.is_some())), (1, u32::from(targets.shadow.is_some()))],
+            &[
+                (0, u32::from(targets.specular.is_some())),
+                (1, u32::from(targets.shadow.is_some())),
+                (2, v.diffuse_rays),
+            ],
         )?;
         Ok(GiTracePass {
             frame: frame.clone(),

@@ -1,0 +1,581 @@
+//! How much indirect light the cone tracer puts where, against ground truth (lavapipe in CI,
+//! validation on): the Cornell box region by region against a cached path-traced reference,
+//! closed boxes against Le / (1 - rho), a lone plane against zero, the directional volumes
+//! and the specular cone against geometry, and flat faces against stripes.
+
+mod common;
+
+use common::*;
+use dvsgi::metrics::LinearImage;
+use dvsgi::reference::{PathTracer, ReferenceOptions};
+use dvsgi::regions::{region_stats, Grouping, Pair, RegionMap, RegionStats};
+use dvsgi::render::{FrameOutput, Renderer};
+use dvsgi::scene::{Aabb, Camera, Material, Motion, Object, RenderSettings, Scene};
+use glam::{Mat4, Vec3};
+use std::path::PathBuf;
+
+/// The cached Cornell references: 64x64 at 4096 spp (full and direct light only), traced with
+/// `dvsgi reference scenes/cornell-box.toml --width 64 --height 64 --spp 4096 --out
+/// tests/data/cornell-64.exr` (and `--spp 64 --bounces 0` for the direct light).
+fn data(name: &str) -> LinearImage {
+    LinearImage::read_exr(&repo().join("tests/data").join(name)).unwrap()
+}
+
+const SIZE: &str = "64";
+
+fn cornell(overrides: &[(&str, &str)]) -> Scene {
+    let mut all = vec![("render.width", SIZE), ("render.height", SIZE), ("gi.voxel_resolution", "64")];
+    all.extend_from_slice(overrides);
+    load(&repo().join("scenes/cornell-box.toml"), &all)
+}
+
+fn linear(out: &FrameOutput) -> LinearImage {
+    LinearImage { width: out.width, height: out.height, rgb: dvsgi::output::radiance_rgb(out) }
+}
+
+fn minus(a: &LinearImage, b: &LinearImage) -> LinearImage {
+    LinearImage { width: a.width, height: a.height, rgb: a.rgb.iter().zip(&b.rgb).map(|(x, y)| x - y).collect() }
+}
+
+fn stats<'a>(all: &'a [RegionStats], grouping: Grouping, name: &str) -> &'a RegionStats {
+    all.iter().find(|s| s.grouping == grouping && s.name == name).unwrap_or_else(|| panic!("no region {name}"))
+}
+
+/// The cached reference still describes the scene: a fresh 64-spp trace agrees with it per
+/// mesh within 4 standard errors of the fresh trace (plus 1%).
+fn check_cached_reference(ctx: &std::sync::Arc<dvsgi::gpu::Context>, scene: &Scene, cached: &LinearImage) {
+    let mut pt = PathTracer::new(ctx, scene, ReferenceOptions { spp: 64, ..Default::default() }).unwrap();
+    pt.run(|_, _| {}).unwrap();
+    let fresh = pt.image().unwrap();
+    drop(pt);
+    let fresh_img = LinearImage { width: fresh.width, height: fresh.height, rgb: fresh.mean.clone() };
+    let var = LinearImage { width: fresh.width, height: fresh.height, rgb: fresh.variance.clone() };
+    let map = RegionMap::trace(scene, fresh.width, fresh.height);
+    let pair = Pair { test: cached, reference: &fresh_img, reference_variance: Some(&var) };
+    for s in region_stats(&map, &pair).iter().filter(|s| s.grouping == Grouping::Mesh) {
+        let tolerance = 4.0 * s.ratio_noise.unwrap() + 0.01;
+        assert!(
+            (s.ratio - 1.0).abs() < tolerance,
+            "tests/data/cornell-64.exr is stale for {}: cached / fresh = {:.4} (noise {:.4}); re-trace it",
+            s.name,
+            s.ratio,
+            s.ratio_noise.unwrap()
+        );
+    }
+}
+
+/// Cornell box at the defaults (64x64 pixels, 64^3 voxels): the indirect light of every wall,
+/// the floor, the ceiling and each block's sides against the reference's (reference minus its
+/// direct light). At 128^3 and 128x128 every region is within 0.80..1.25 (ACCURACY.md); 64^3
+/// voxels are coarser, so the bounds here are 0.65..1.40, and the whole image within 10%.
+#[test]
+fn cornell_indirect_light_matches_the_reference_region_by_region() {
+    let ctx = context();
+    let scene = cornell(&[]);
+    let reference = data("cornell-64.exr");
+    check_cached_reference(&ctx, &scene, &reference);
+    let direct = data("cornell-64-direct.exr");
+    let (out, scene) = render(&ctx, scene);
+    let (indirect, _) = render(&ctx, cornell(&[("render.view", "\"indirect\"")]));
+    let map = RegionMap::trace(&scene, 64, 64);
+    let truth = minus(&reference, &direct);
+    let ind = region_stats(&map, &Pair { test: &linear(&indirect), reference: &truth, reference_variance: None });
+    let whole = region_stats(&map, &Pair { test: &linear(&out), reference: &reference, reference_variance: None });
+    let mut report = String::new();
+    for s in ind.iter().filter(|s| s.grouping == Grouping::Surface && !s.small) {
+        report += &format!("{} {:.3} ({} px); ", s.name, s.ratio, s.pixels);
+    }
+    eprintln!("indirect ratio by surface: {report}");
+    eprintln!("indirect energy {:.3}, image energy {:.3}", ind[0].ratio, whole[0].ratio);
+    for name in
+        ["ceiling -y", "floor +y", "backWall -z", "leftWall -x", "rightWall +x", "tallBlock -z", "shortBlock -z"]
+    {
+        let s = stats(&ind, Grouping::Surface, &format!("box/{name}"));
+        assert!((0.65..=1.40).contains(&s.ratio), "indirect light on {name}: {:.3} of the reference's", s.ratio);
+    }
+    assert!((0.90..=1.20).contains(&ind[0].ratio), "indirect energy {:.3}", ind[0].ratio);
+    assert!((0.95..=1.10).contains(&whole[0].ratio), "image energy {:.3}", whole[0].ratio);
+    // Colour: the red wall's indirect light is as red as the reference's (self-lighting made
+    // coloured walls see their own colour).
+    let red = stats(&ind, Grouping::Surface, "box/leftWall -x");
+    let share = |rgb: [f64; 3]| rgb[0] / (rgb[0] + rgb[1] + rgb[2]);
+    let (got, want) = (share(red.test_rgb), share(red.reference_rgb));
+    assert!((got - want).abs() < 0.05, "red share of the red wall's indirect light {got:.3} vs {want:.3}");
+}
+
+/// Occlusion is counted once: by default the cone AO does not darken the image. An open
+/// corner (a floor meeting a wall, lit from the open side) gets at least most of the indirect
+/// light the path tracer finds near the seam, while `gi.ao = true` (AO multiplying the
+/// traced light, as many engines do) takes away a large part of it.
+#[test]
+fn an_open_corner_is_not_darkened_by_ambient_occlusion() {
+    let ctx = context();
+    let floor = quad(Vec3::new(0.5, 0.0, 0.5), Vec3::new(0.5, 0.0, 0.0), Vec3::new(0.0, 0.0, 0.5), Vec3::Y);
+    let wall = quad(Vec3::new(0.0, 0.5, 0.5), Vec3::new(0.0, 0.5, 0.0), Vec3::new(0.0, 0.0, 0.5), Vec3::X);
+    let make = |ao: bool, view: dvsgi::scene::View| {
+        let mut s = scene_of(
+            vec![mesh("floor", &floor, 0, None), mesh("wall", &wall, 0, None)],
+            vec![material("white", 0.8, Vec3::ZERO)],
+            camera(Vec3::new(1.1, 0.6, 0.5), Vec3::new(0.0, 0.0, 0.5), 60.0),
+            vec![point_light(Vec3::new(0.7, 0.8, 0.5), 1.0)],
+            Aabb { min: Vec3::splat(-0.05), max: Vec3::splat(1.05) },
+        );
+        s.settings.gi.ao = ao;
+        s.settings.view = view;
+        s
+    };
+    let scene = make(false, dvsgi::scene::View::Final);
+    let trace = |bounces: Option<u32>| {
+        let opts = ReferenceOptions { spp: 512, max_bounces: bounces, ..Default::default() };
+        let mut pt = PathTracer::new(&ctx, &scene, opts).unwrap();
+        pt.run(|_, _| {}).unwrap();
+        pt.image().unwrap().mean
+    };
+    let (full, direct) = (trace(None), trace(Some(0)));
+    let truth: Vec<f32> = full.iter().zip(&direct).map(|(a, b)| a - b).collect();
+    let (default, _) = render(&ctx, make(false, dvsgi::scene::View::Indirect));
+    let (with_ao, _) = render(&ctx, make(true, dvsgi::scene::View::Indirect));
+    // Pixels within 5 cm of the seam (on either surface).
+    let tris = triangles(&scene, 0.0);
+    let near_seam: Vec<usize> = (0..32 * 32)
+        .filter(|&i| {
+            let (o, d) = camera_ray(&scene, (i % 32) as u32, (i / 32) as u32);
+            raycast(&tris, o, d, 1e-4, 1e4)
+                .map(|(t, _)| o + d * t)
+                .is_some_and(|p| p.x.max(p.y) < 0.05 && p.z > 0.1 && p.z < 0.9)
+        })
+        .collect();
+    assert!(near_seam.len() >= 20, "{} pixels near the seam", near_seam.len());
+    let sum = |v: &[f32], stride: usize| {
+        near_seam.iter().map(|&i| (0..3).map(|c| v[stride * i + c] as f64).sum::<f64>()).sum::<f64>()
+    };
+    let want = sum(&truth, 3);
+    let (got, got_ao) = (sum(&default.radiance, 4) / want, sum(&with_ao.radiance, 4) / want);
+    eprintln!("indirect light near the seam: {got:.3} of the reference's; with gi.ao = true {got_ao:.3}");
+    // Not darkened. It is too bright instead (2.0 here, 1.3-1.4 away from the seam): cones
+    // whose footprint grazes a lit surface see it as opaque (ACCURACY.md, "What the tracer
+    // cannot do"); the upper bound only catches gross errors.
+    assert!((0.75..=2.5).contains(&got), "near the seam the indirect light is {got:.3} of the reference's");
+    assert!(got_ao < 0.5 * got, "AO should darken the seam when asked for: {got_ao:.3} vs {got:.3}");
+}
+
+/// Flat faces show no stripes: on the tall block's front face (not aligned with the voxel
+/// grid, so it voxelizes as a staircase) the column-to-column variation of the indirect light
+/// is no larger than the reference's (its noise plus its real gradient), with 25% margin.
+#[test]
+fn flat_faces_have_no_stripes() {
+    let ctx = context();
+    let reference = data("cornell-64.exr");
+    let direct = data("cornell-64-direct.exr");
+    let truth = minus(&reference, &direct);
+    let (ind, scene) = render(&ctx, cornell(&[("render.view", "\"indirect\"")]));
+    let map = RegionMap::trace(&scene, 64, 64);
+    let face = map.surfaces.iter().position(|s| s.mesh == "tallBlock" && s.facing == "-z").unwrap() as u32;
+    let variation = |img: &LinearImage| {
+        // Mean over the face's rows of |second difference| of luminance along each row,
+        // relative to the face's mean (an interior pixel needs both neighbours on the face).
+        let lum = |i: usize| (img.rgb[3 * i] + img.rgb[3 * i + 1] + img.rgb[3 * i + 2]) as f64;
+        let (mut sum, mut mean, mut n) = (0.0, 0.0, 0usize);
+        for y in 0..64usize {
+            for x in 1..63usize {
+                let i = y * 64 + x;
+                if map.pixel[i - 1] == face && map.pixel[i] == face && map.pixel[i + 1] == face {
+                    sum += (lum(i - 1) - 2.0 * lum(i) + lum(i + 1)).abs();
+                    mean += lum(i);
+                    n += 1;
+                }
+            }
+        }
+        assert!(n > 100, "{n} face pixels");
+        sum / mean
+    };
+    let (got, want) = (variation(&linear(&ind)), variation(&truth));
+    eprintln!("column-to-column variation on the tall block's face: {got:.4} (reference {want:.4})");
+    assert!(got <= 1.25 * want, "stripes: variation {got:.4} vs the reference's {want:.4}");
+}
+
+/// A scene of the given triangles (one object per material index), lights and camera.
+fn scene_of(
+    meshes: Vec<dvsgi::scene::Mesh>,
+    materials: Vec<Material>,
+    camera: Camera,
+    lights: Vec<dvsgi::scene::Light>,
+    bounds: Aabb,
+) -> Scene {
+    let objects = (0..meshes.len())
+        .map(|i| Object {
+            name: format!("o{i}"),
+            meshes: vec![i as u32],
+            transform: Mat4::IDENTITY,
+            dynamic: false,
+            motion: Motion::None,
+        })
+        .collect();
+    let mut settings = RenderSettings { width: 32, height: 32, ..Default::default() };
+    settings.gi.voxel_resolution = 32;
+    Scene {
+        path: PathBuf::from("test"),
+        name: "test".into(),
+        meshes,
+        objects,
+        materials,
+        textures: vec![],
+        camera,
+        lights,
+        settings,
+        bounds: Some(bounds),
+    }
+}
+
+fn material(name: &str, albedo: f32, emission: Vec3) -> Material {
+    Material {
+        name: name.into(),
+        albedo: Vec3::splat(albedo),
+        albedo_texture: None,
+        specular: Vec3::ZERO,
+        shininess: 1.0,
+        emission,
+    }
+}
+
+/// Two triangles covering the axis-aligned square at `c` spanning `u` and `v` (half sizes),
+/// facing `n`.
+fn quad(c: Vec3, u: Vec3, v: Vec3, n: Vec3) -> [[Vec3; 3]; 2] {
+    let (a, b, cc, d) = (c - u - v, c + u - v, c + u + v, c - u + v);
+    if (b - a).cross(cc - a).dot(n) > 0.0 {
+        [[a, b, cc], [a, cc, d]]
+    } else {
+        [[a, cc, b], [a, d, cc]]
+    }
+}
+
+/// The inside of a cube of side 1 around the origin, normals inward.
+fn closed_box() -> Vec<[Vec3; 3]> {
+    let mut tris = Vec::new();
+    for axis in 0..3 {
+        for s in [-1.0f32, 1.0] {
+            let mut n = Vec3::ZERO;
+            n[axis] = -s;
+            let mut u = Vec3::ZERO;
+            u[(axis + 1) % 3] = 0.5;
+            let mut v = Vec3::ZERO;
+            v[(axis + 2) % 3] = 0.5;
+            tris.extend(quad(-n * 0.5, u, v, n));
+        }
+    }
+    tris
+}
+
+/// A camera at `position` looking at `target` (y up) with a vertical field of view in degrees.
+fn camera(position: Vec3, target: Vec3, fov_y_deg: f32) -> Camera {
+    Camera { position, target, up: Vec3::Y, fov_y_deg, near: 0.01, far: 10.0 }
+}
+
+fn inside_camera() -> Camera {
+    Camera {
+        position: Vec3::new(0.1, -0.05, 0.2),
+        target: Vec3::new(-0.3, 0.1, -0.4),
+        up: Vec3::Y,
+        fov_y_deg: 100.0,
+        near: 0.001,
+        far: 10.0,
+    }
+}
+
+/// A closed box of emission Le and albedo rho radiates Le / (1 - rho) everywhere once the
+/// bounces have converged (the furnace), here through the cones alone; the diagnostic ray
+/// gather through the voxels gets the one-bounce value rho Le.
+#[test]
+fn closed_emissive_box_reaches_le_over_one_minus_rho() {
+    let ctx = context();
+    let tris = closed_box();
+    let (rho, le) = (0.5f32, 1.0f32);
+    let make = |extra: &dyn Fn(&mut Scene)| {
+        let mut s = scene_of(
+            vec![mesh("box", &tris, 0, None)],
+            vec![material("furnace", rho, Vec3::splat(le))],
+            inside_camera(),
+            vec![],
+            Aabb { min: Vec3::splat(-0.55), max: Vec3::splat(0.55) },
+        );
+        extra(&mut s);
+        s
+    };
+    let mean_and_min = |out: &FrameOutput| {
+        let v: Vec<f32> = out.radiance.chunks_exact(4).map(|p| (p[0] + p[1] + p[2]) / 3.0).collect();
+        (v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64, v.iter().cloned().fold(f32::MAX, f32::min))
+    };
+    // Several frames: each update feeds its bounced light to the next.
+    let mut r = Renderer::new(&ctx, make(&|s| s.settings.gi.bounces = 2)).unwrap();
+    for _ in 0..4 {
+        r.render(0.0, false).unwrap();
+    }
+    r.render(0.0, true).unwrap();
+    let (mean, min) = mean_and_min(&r.output());
+    drop(r);
+    let want = (le / (1.0 - rho)) as f64;
+    eprintln!("furnace through the cones: mean {mean:.4}, min {min:.4}, expected {want}");
+    assert!((mean / want - 1.0).abs() < 0.05, "mean {mean:.4} vs Le/(1-rho) = {want}");
+    assert!(min as f64 > 0.9 * want, "darkest pixel {min:.4} vs {want}");
+    // One bounce gathered by cones and by rays: rho Le (emission is stored in 8 bits).
+    for (label, rays) in [("cones", 0), ("rays", 16)] {
+        let (out, _) = render(
+            &ctx,
+            make(&|s| {
+                s.settings.gi.bounces = 0;
+                s.settings.gi.diffuse_rays = rays;
+                s.settings.view = dvsgi::scene::View::Indirect;
+            }),
+        );
+        let (mean, _) = mean_and_min(&out);
+        eprintln!("one bounce by {label}: {mean:.4} (rho Le = {})", rho * le);
+        let tolerance = if rays > 0 { 0.015 } else { 0.06 };
+        assert!((mean / (rho * le) as f64 - 1.0).abs() < tolerance, "{label}: {mean:.4} vs {}", rho * le);
+    }
+    assert_no_validation_messages(&ctx);
+}
+
+/// A lone lit plane receives (almost) no indirect light: its cones must not see its own
+/// voxels, at any voxel resolution.
+#[test]
+fn a_lone_lit_plane_gets_no_indirect_light() {
+    let ctx = context();
+    let tris = quad(Vec3::ZERO, Vec3::new(0.5, 0.0, 0.0), Vec3::new(0.0, 0.0, 0.5), Vec3::Y);
+    for res in [16u32, 64] {
+        let mut s = scene_of(
+            vec![mesh("plane", &tris, 0, None)],
+            vec![material("white", 0.8, Vec3::ZERO)],
+            camera(Vec3::new(0.0, 1.0, 1.2), Vec3::ZERO, 50.0),
+            vec![point_light(Vec3::new(0.1, 0.3, 0.0), 1.0)],
+            Aabb { min: Vec3::splat(-0.6), max: Vec3::splat(0.6) },
+        );
+        s.settings.gi.voxel_resolution = res;
+        let (direct, _) = render(&ctx, s.clone());
+        s.settings.view = dvsgi::scene::View::Indirect;
+        let (indirect, _) = render(&ctx, s);
+        let mean = |o: &FrameOutput| o.radiance.chunks_exact(4).map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>();
+        let share = mean(&indirect) / mean(&direct);
+        eprintln!("{res}^3: indirect light {share:.5} of the image");
+        assert!(share < 0.005, "{res}^3: a lone plane lights itself: indirect {share:.5} of the image");
+    }
+}
+
+fn point_light(position: Vec3, intensity: f32) -> dvsgi::scene::Light {
+    dvsgi::scene::Light {
+        name: "light".into(),
+        kind: dvsgi::scene::LightKind::Point { position, intensity: Vec3::splat(intensity) },
+        cast_shadows: true,
+        motion: Motion::None,
+    }
+}
+
+/// Mean radiance of the pixels `keep` selects.
+fn mean_where(out: &FrameOutput, keep: impl Fn(usize) -> bool) -> (Vec3, usize) {
+    let (mut s, mut n) = (Vec3::ZERO, 0);
+    for (i, p) in out.radiance.chunks_exact(4).enumerate() {
+        if keep(i) {
+            s += Vec3::new(p[0], p[1], p[2]);
+            n += 1;
+        }
+    }
+    (s / n.max(1) as f32, n)
+}
+
+/// The directional volumes: a red and a blue emissive layer two voxels apart, seen by white
+/// walls on either side. Where the cones are wide enough to see both layers in one texel,
+/// the volume of the cones' own direction must show the nearer layer: the wall on the red side
+/// gets red light, the wall on the blue side blue light.
+#[test]
+fn cones_see_the_nearer_of_two_layers_in_each_direction() {
+    let ctx = context();
+    let (u, v) = (Vec3::new(0.0, 0.4, 0.0), Vec3::new(0.0, 0.0, 0.4));
+    let c = Vec3::new(0.0, 0.5, 0.5);
+    // Voxels 16 and 18 of 32: one texel of directional level 1 and above holds both.
+    let red_layer = quad(c + Vec3::X * 0.53, u, v, -Vec3::X);
+    let blue_layer = quad(c + Vec3::X * 0.59, u, v, Vec3::X);
+    let red_side = quad(c + Vec3::X * 0.05, u, v, Vec3::X);
+    let blue_side = quad(c + Vec3::X * 0.95, u, v, -Vec3::X);
+    let look = |from: f32, to: f32| camera(c + Vec3::X * from, c + Vec3::X * to, 90.0);
+    let colours = |camera: Camera| {
+        let mut s = scene_of(
+            vec![
+                mesh("red", &red_layer, 0, None),
+                mesh("blue", &blue_layer, 1, None),
+                mesh("walls", &[red_side[0], red_side[1], blue_side[0], blue_side[1]], 2, None),
+            ],
+            vec![
+                material("red", 0.0, Vec3::new(1.0, 0.0, 0.0)),
+                material("blue", 0.0, Vec3::new(0.0, 0.0, 1.0)),
+                material("white", 0.8, Vec3::ZERO),
+            ],
+            camera,
+            vec![],
+            Aabb { min: Vec3::ZERO, max: Vec3::ONE },
+        );
+        s.settings.gi.bounces = 0;
+        s.settings.view = dvsgi::scene::View::Indirect;
+        let (out, _) = render(&ctx, s);
+        // The middle of the picture: the wall the camera faces.
+        mean_where(&out, |i| {
+            let (x, y) = (i % 32, i / 32);
+            (8..24).contains(&x) && (8..24).contains(&y)
+        })
+        .0
+    };
+    let on_red_side = colours(look(0.4, 0.0));
+    let on_blue_side = colours(look(0.7, 1.0));
+    eprintln!("wall on the red side {on_red_side}, on the blue side {on_blue_side}");
+    assert!(on_red_side.x > 3.0 * on_red_side.z, "the wall on the red side sees {on_red_side}");
+    assert!(on_blue_side.z > 3.0 * on_blue_side.x, "the wall on the blue side sees {on_blue_side}");
+}
+
+/// The specular cone follows the mirror direction: on a glossy floor under one emissive
+/// patch, the pixels whose mirror ray hits the patch get far more specular light than those
+/// whose mirror ray misses it (including the ones right under the patch).
+#[test]
+fn specular_light_comes_from_the_mirror_direction() {
+    let ctx = context();
+    let floor = quad(Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0), Vec3::Y);
+    let patch = quad(Vec3::new(0.4, 0.6, 0.0), Vec3::new(0.2, 0.0, 0.0), Vec3::new(0.0, 0.0, 0.2), -Vec3::Y);
+    let glossy = Material {
+        name: "glossy".into(),
+        albedo: Vec3::splat(0.1),
+        albedo_texture: None,
+        specular: Vec3::splat(0.8),
+        shininess: 200.0,
+        emission: Vec3::ZERO,
+    };
+    let view = camera(Vec3::new(-1.2, 0.5, 0.0), Vec3::new(0.1, 0.0, 0.0), 60.0);
+    let indirect = |specular: bool| {
+        let mut s = scene_of(
+            vec![mesh("floor", &floor, 0, None), mesh("patch", &patch, 1, None)],
+            vec![glossy.clone(), material("light", 0.0, Vec3::splat(4.0))],
+            view.clone(),
+            vec![],
+            Aabb { min: Vec3::new(-1.05, -0.05, -1.05), max: Vec3::new(1.05, 2.05, 1.05) },
+        );
+        s.settings.gi.bounces = 0;
+        s.settings.gi.specular = specular;
+        s.settings.view = dvsgi::scene::View::Indirect;
+        render(&ctx, s)
+    };
+    let (with, scene) = indirect(true);
+    let (without, _) = indirect(false);
+    let tris = triangles(&scene, 0.0);
+    let patch_tris: Vec<Triangle> = patch.iter().map(|t| Triangle { a: t[0], b: t[1], c: t[2], material: 1 }).collect();
+    // Floor pixels, split by where their mirror ray goes.
+    let mut hit = vec![false; 32 * 32];
+    let mut floor_px = vec![false; 32 * 32];
+    for y in 0..32u32 {
+        for x in 0..32u32 {
+            let (o, d) = camera_ray(&scene, x, y);
+            if let Some((t, i)) = raycast(&tris, o, d, 1e-4, 1e4) {
+                if tris[i].material == 0 {
+                    let i = (y * 32 + x) as usize;
+                    floor_px[i] = true;
+                    let r = Vec3::new(d.x, -d.y, d.z);
+                    hit[i] = raycast(&patch_tris, o + d * t, r, 1e-4, 1e4).is_some();
+                }
+            }
+        }
+    }
+    let specular = |keep: &dyn Fn(usize) -> bool| {
+        let (a, n) = mean_where(&with, keep);
+        let (b, _) = mean_where(&without, keep);
+        ((a - b).element_sum() / 3.0, n)
+    };
+    let (s_hit, n_hit) = specular(&|i| floor_px[i] && hit[i]);
+    let (s_miss, n_miss) = specular(&|i| floor_px[i] && !hit[i]);
+    eprintln!("specular light: mirror ray on the patch {s_hit:.4} ({n_hit} px), elsewhere {s_miss:.4} ({n_miss} px)");
+    assert!(n_hit >= 10 && n_miss >= 100, "{n_hit} pixels reflect the patch, {n_miss} do not");
+    assert!(
+        s_hit > 5.0 * s_miss.max(0.0) && s_hit > 0.0,
+        "specular {s_hit:.4} where the mirror ray hits vs {s_miss:.4}"
+    );
+}
+
+/// McGuire's glossy Cornell box (a glossy sphere and box, an emissive ceiling light) at the
+/// defaults, 64x64 and 64^3 voxels, against its cached reference (`dvsgi reference
+/// scenes/cornell-glossy.toml --width 64 --height 64 --spp 4096`): the whole image within
+/// 0.88..1.08 of the reference's energy and every mesh within 0.6..1.6 (measured: 0.76 for the
+/// floor .. 1.49 for the glossy box); without the specular cone the glossy objects lose most
+/// of their reflected light.
+#[test]
+fn glossy_cornell_box_agrees_with_the_reference() {
+    let ctx = context();
+    let glossy = |specular: &str| {
+        load(
+            &repo().join("scenes/cornell-glossy.toml"),
+            &[
+                ("render.width", SIZE),
+                ("render.height", SIZE),
+                ("gi.voxel_resolution", "64"),
+                ("gi.specular", specular),
+            ],
+        )
+    };
+    let reference = LinearImage::read_exr(&repo().join("tests/data/cornell-glossy-64.exr")).unwrap();
+    check_cached_reference(&ctx, &glossy("true"), &reference);
+    let ratios = |specular: &str| {
+        let (out, scene) = render(&ctx, glossy(specular));
+        let map = RegionMap::trace(&scene, 64, 64);
+        region_stats(&map, &Pair { test: &linear(&out), reference: &reference, reference_variance: None })
+    };
+    let (with, without) = (ratios("true"), ratios("false"));
+    let mut report = String::new();
+    for s in with.iter().filter(|s| s.grouping == Grouping::Mesh) {
+        report += &format!("{} {:.3}; ", s.name, s.ratio);
+        assert!((0.6..=1.6).contains(&s.ratio), "{}: {:.3} of the reference", s.name, s.ratio);
+    }
+    eprintln!("glossy Cornell box, image {:.3}, by mesh: {report}", with[0].ratio);
+    assert!((0.88..=1.08).contains(&with[0].ratio), "image energy {:.3}", with[0].ratio);
+    for glossy_mesh in ["sphere", "shortBox"] {
+        let name = format!("CornellBox-Glossy-Floor/{glossy_mesh}");
+        let (a, b) = (stats(&with, Grouping::Mesh, &name).ratio, stats(&without, Grouping::Mesh, &name).ratio);
+        assert!(a > b + 0.3, "{glossy_mesh}: {a:.3} with the specular cone, {b:.3} without");
+    }
+}
+
+/// Bounce feedback: n updates of one bounce each, each gathering the previous update's bounced
+/// light, give the light of n bounces in one update; and after the light moves, a few updates
+/// bring the image to what a fresh render at the new position shows (the lag is the price).
+#[test]
+fn bounce_feedback_accumulates_over_updates_and_follows_motion() {
+    let ctx = context();
+    let scene = |extra: &[(&str, &str)]| {
+        let mut o = vec![("render.width", "32"), ("render.height", "32"), ("gi.voxel_resolution", "32")];
+        o.push(("lights.0.motion", "{ velocity = [0, -0.25, 0] }"));
+        o.extend_from_slice(extra);
+        load(&repo().join("scenes/cornell-box.toml"), &o)
+    };
+    let mean = |o: &FrameOutput| o.radiance.chunks_exact(4).map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>();
+    let frames = |r: &mut Renderer, t: f32, n: u32| {
+        for _ in 1..n {
+            r.render(t, false).unwrap();
+        }
+        r.render(t, true).unwrap();
+        mean(&r.output())
+    };
+    let mut fed = Renderer::new(&ctx, scene(&[("gi.first_update_bounces", "1")])).unwrap();
+    let accumulated = frames(&mut fed, 0.0, 4);
+    let mut once = Renderer::new(&ctx, scene(&[("gi.bounce_feedback", "false"), ("gi.bounces", "4")])).unwrap();
+    let in_one = frames(&mut once, 0.0, 1);
+    drop(once);
+    eprintln!("4 updates of 1 bounce: {accumulated:.4}, 1 update of 4 bounces: {in_one:.4}");
+    assert!((accumulated / in_one - 1.0).abs() < 0.01, "{accumulated} vs {in_one}");
+    // The light drops 25 cm: the first frame after the move still carries the old bounced
+    // light, the next ones converge on a fresh render at the new position.
+    let mut lag = Vec::new();
+    for _ in 0..4 {
+        lag.push(frames(&mut fed, 1.0, 1));
+    }
+    drop(fed);
+    let mut fresh = Renderer::new(&ctx, scene(&[("gi.first_update_bounces", "8")])).unwrap();
+    let target = frames(&mut fresh, 1.0, 1);
+    drop(fresh);
+    let errors: Vec<f64> = lag.iter().map(|m| (m / target - 1.0).abs()).collect();
+    eprintln!("after the light moved: error of each frame against a fresh render {errors:?}");
+    assert!(errors[3] < 0.02, "four updates after the move: {:.4} off", errors[3]);
+    assert!(errors[3] <= errors[0], "the error does not shrink: {errors:?}");
+    assert_no_validation_messages(&ctx);
+}
