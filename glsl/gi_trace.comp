@@ -140,9 +140,8 @@ void main() {
             if (l.shadow.x < 0) continue;
             LightSample s = sample_light(l, P);
             if (dot(s.wi, N) <= 0.0) continue;
-            // Also step off along the light direction: at grazing angles the cone would
-            // otherwise run through the surface's own voxels.
-            float dist = s.distance > 0.0 ? s.distance / voxel - 2.0 * gi.trace.z : 1e30;
+            // Up to the light (the tracer keeps even grazing cones off the surface's voxels).
+            float dist = s.distance > 0.0 ? s.distance / voxel : 1e30;
             vis[i] = 1.0 - trace_cone(o, s.wi, gi.shadow.x, dist).opacity;
         }
         imageStore(out_shadow, lo, vis);

@@ -76,7 +76,7 @@ float clear_texel(ConeOrigin o, float l1, float h) {
 }
 
 // March a cone from origin o along unit `dir` with half-aperture tangent `tan_half` up to
-// `max_t` voxels:
+// `max_t` voxels from the surface point:
 // * It starts where a full-resolution sample clears the origin's own voxels (plus
 //   gi.start_offset), and each sample filters texels of side s = half the cone's diameter
 //   (a trilinear texel of side s spreads over the same variance, s^2/4 per axis, as the
@@ -101,6 +101,8 @@ ConeResult trace_cone(ConeOrigin o, vec3 dir, float tan_half, float max_t) {
     float h0 = l1 * (SELF_CLEARANCE + o.layer) + gi.trace.z;
     vec3 g = o.p + o.n * h0;
     float rise = dot(dir, o.n);  // height gained per voxel along the cone
+    // max_t is measured from the surface point; the cone starts h0 off it.
+    max_t -= h0 * max(rise, 0.0);
     float t = 0.0;
     for (int i = 0; i < 1024 && t < max_t && r.opacity < 0.995; ++i) {
         vec3 p = g + dir * t;
