@@ -7,6 +7,7 @@
 #include "common.glsl"
 #include "lights.glsl"
 #include "voxel.glsl"
+#include "grid_ray.glsl"
 #include "cone_params.glsl"
 #include "gbuffer_read.glsl"
 
@@ -47,29 +48,16 @@ float next_random(inout uint state) {
     return float((w >> 22u) ^ w) * (1.0 / 4294967296.0);
 }
 
-// Radiance of the first occupied voxel along a ray from g (voxel units), by a 3D DDA through
-// the full-resolution volume; black when the ray leaves the grid.
+// Radiance of the first occupied voxel along a ray from g (voxel units) through the
+// full-resolution volume; black when the ray leaves the grid.
 vec3 first_voxel_radiance(vec3 g, vec3 d) {
     int res = int(grid.dims.x);
-    ivec3 c = ivec3(floor(g));
-    ivec3 stp = ivec3(sign(d));
-    vec3 inv = 1.0 / d;
-    vec3 next = (vec3(c) + max(vec3(stp), vec3(0.0)) - g) * inv;
-    vec3 delta = abs(inv);
+    VoxelWalk w = voxel_walk(g, d);
+    if (any(lessThan(w.c, ivec3(0))) || any(greaterThanEqual(w.c, ivec3(res)))) return vec3(0.0);
     for (int i = 0; i < 3 * 512; ++i) {
-        if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(res)))) break;
-        vec4 v = texelFetch(vox_lod0, c, 0);
+        vec4 v = texelFetch(vox_lod0, w.c, 0);
         if (v.a > 0.0) return v.rgb;
-        if (next.x < next.y && next.x < next.z) {
-            c.x += stp.x;
-            next.x += delta.x;
-        } else if (next.y < next.z) {
-            c.y += stp.y;
-            next.y += delta.y;
-        } else {
-            c.z += stp.z;
-            next.z += delta.z;
-        }
+        if (!voxel_walk_step(w, res)) break;
     }
     return vec3(0.0);
 }

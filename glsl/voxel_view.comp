@@ -22,33 +22,20 @@ void main() {
     vec3 o = ray.o, d = ray.d;
     float tenter = ray.tenter, texit = ray.texit;
     float res = float(grid.dims.x);
-    vec3 inv = 1.0 / d;
     vec4 result = vec4(0.0, 0.0, 0.0, 1.0);
     if (tenter < texit) {
-        vec3 p = o + d * (tenter + 1e-4);
-        ivec3 c = clamp(ivec3(floor(p)), ivec3(0), ivec3(int(res) - 1));
-        ivec3 stp = ivec3(sign(d));
-        vec3 next = (vec3(c) + max(vec3(stp), vec3(0.0)) - o) * inv;
-        vec3 delta = abs(inv);
+        // Just inside the grid (the entry point may round onto its far side).
+        vec3 p = clamp(o + d * (tenter + 1e-4), vec3(0.0), vec3(res - 1e-3));
+        VoxelWalk w = voxel_walk(p, d);
         for (int i = 0; i < 3 * 512; ++i) {
-            uint v = imageLoad(volume, c).r;
+            uint v = imageLoad(volume, w.c).r;
             if ((v >> 24) != 0u) {
                 vec3 rgb = unpack_rgb_count(v).rgb / 255.0;
                 result.rgb = MODE == 2u ? rgb * grid.params.x : (MODE == 3u ? vec3(0.0) : rgb);
-                if (MODE == 4u) result.rgb = imageLoad(vox_radiance, c).rgb * grid.params.z;
+                if (MODE == 4u) result.rgb = imageLoad(vox_radiance, w.c).rgb * grid.params.z;
                 break;
             }
-            if (next.x < next.y && next.x < next.z) {
-                c.x += stp.x;
-                next.x += delta.x;
-            } else if (next.y < next.z) {
-                c.y += stp.y;
-                next.y += delta.y;
-            } else {
-                c.z += stp.z;
-                next.z += delta.z;
-            }
-            if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(int(res))))) break;
+            if (!voxel_walk_step(w, int(res))) break;
         }
     }
     imageStore(out_radiance, px, result);

@@ -360,8 +360,20 @@ pub fn compare_files(
 ) -> Result<Comparison, MetricsError> {
     let t = LinearImage::read_exr(test)?;
     let r = LinearImage::read_exr(reference)?;
-    check_pair(&t, &test.display().to_string(), &r, &reference.display().to_string())?;
-    Ok(compare_checked(&t, &r, exposure, tonemap_mode))
+    compare_named(&t, &test.display().to_string(), &r, &reference.display().to_string(), exposure, tonemap_mode)
+}
+
+/// [`compare`] with the images' names (paths) for the errors.
+pub fn compare_named(
+    test: &LinearImage,
+    test_name: &str,
+    reference: &LinearImage,
+    ref_name: &str,
+    exposure: f32,
+    tonemap_mode: ToneMap,
+) -> Result<Comparison, MetricsError> {
+    check_pair(test, test_name, reference, ref_name)?;
+    Ok(compare_checked(test, reference, exposure, tonemap_mode))
 }
 
 fn compare_checked(test: &LinearImage, reference: &LinearImage, exposure: f32, tonemap_mode: ToneMap) -> Comparison {

@@ -34,23 +34,6 @@ fn classify(scene: &Scene) -> Vec<Option<(String, Vec3, Vec3)>> {
     out
 }
 
-fn pixel(out: &FrameOutput, i: usize) -> Vec3 {
-    Vec3::from_slice(&out.radiance[4 * i..4 * i + 3])
-}
-
-/// Sum of radiance over the pixels `keep` selects.
-fn sum_where(out: &FrameOutput, keep: impl Fn(usize) -> bool) -> (Vec3, usize) {
-    let mut s = Vec3::ZERO;
-    let mut n = 0;
-    for i in 0..(out.width * out.height) as usize {
-        if keep(i) {
-            s += pixel(out, i);
-            n += 1;
-        }
-    }
-    (s, n)
-}
-
 fn mean_radiance(out: &FrameOutput) -> f64 {
     out.radiance.chunks_exact(4).map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>() / out.radiance.len() as f64
 }

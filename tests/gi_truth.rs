@@ -369,15 +369,9 @@ fn point_light(position: Vec3, intensity: f32) -> dvsgi::scene::Light {
     }
 }
 
-/// Mean radiance of the pixels `keep` selects.
+/// Mean radiance of the pixels `keep` selects, and their number.
 fn mean_where(out: &FrameOutput, keep: impl Fn(usize) -> bool) -> (Vec3, usize) {
-    let (mut s, mut n) = (Vec3::ZERO, 0);
-    for (i, p) in out.radiance.chunks_exact(4).enumerate() {
-        if keep(i) {
-            s += Vec3::new(p[0], p[1], p[2]);
-            n += 1;
-        }
-    }
+    let (s, n) = sum_where(out, keep);
     (s / n.max(1) as f32, n)
 }
 

@@ -306,7 +306,7 @@ fn compare(
     json: Option<&std::path::Path>,
     regions: Option<RegionArgs>,
 ) -> dvsgi::Result<()> {
-    use dvsgi::metrics::{compare_files, flip_error_map, LinearImage};
+    use dvsgi::metrics::{compare_named, flip_error_map, LinearImage};
     let tonemap: dvsgi::scene::ToneMap = serde_json::from_value(serde_json::Value::String(tonemap.to_string()))
         .map_err(|_| dvsgi::Error::Usage(format!("--tonemap {tonemap}: use aces, reinhard or clamp")))?;
     if !exposure.is_finite() {
@@ -321,15 +321,15 @@ fn compare(
             return Err(dvsgi::Error::Usage(format!("{}: this is a picture; give a .png name", picture.display())));
         }
     }
-    let c = compare_files(test, reference, exposure, tonemap)?;
+    let (t, r) = (LinearImage::read_exr(test)?, LinearImage::read_exr(reference)?);
+    let name = |p: &std::path::Path| p.display().to_string();
+    let c = compare_named(&t, &name(test), &r, &name(reference), exposure, tonemap)?;
     print_comparison(test, reference, &c);
     let region_report = match &regions {
-        Some(r) => Some(compare_regions(common, test, reference, r)?),
+        Some(args) => Some(compare_regions(common, &t, &r, reference, args)?),
         None => None,
     };
     if let Some(d) = diff {
-        let t = LinearImage::read_exr(test)?;
-        let r = LinearImage::read_exr(reference)?;
         dvsgi::output::write_png(d, &flip_error_map(&t, &r, exposure, tonemap)?)?;
         println!("wrote {}", d.display());
     }
@@ -362,57 +362,58 @@ fn print_comparison(test: &std::path::Path, reference: &std::path::Path, c: &dvs
     println!("  (FLIP: 0 = identical, lower is better; SSIM: 1 = identical, higher is better)");
 }
 
-/// The per-region part of `compare`: label the pixels from the scene, report, draw the ratio.
+/// The per-region part of `compare` (the two images already read and of one size): label the
+/// pixels from the scene, report, draw the ratio.
 fn compare_regions(
     common: &CommonArgs,
-    test: &std::path::Path,
+    t: &dvsgi::metrics::LinearImage,
+    r: &dvsgi::metrics::LinearImage,
     reference: &std::path::Path,
     args: &RegionArgs,
 ) -> dvsgi::Result<dvsgi::regions::RegionReport> {
     use dvsgi::metrics::LinearImage;
     use dvsgi::regions::{indirect_pair, ratio_picture, region_stats, Pair, RegionMap, RegionReport};
-    let t = LinearImage::read_exr(test)?;
-    let t_size = (t.width, t.height);
+    // Further images must have the test image's size.
     let read = |p: &std::path::Path, what: &str| -> dvsgi::Result<LinearImage> {
         let img = LinearImage::read_exr(p)?;
-        if (img.width, img.height) != (t_size.0, t_size.1) {
+        if (img.width, img.height) != (t.width, t.height) {
             return Err(dvsgi::Error::Usage(format!(
                 "{}: {what} is {}x{} but the test image is {}x{}",
                 p.display(),
                 img.width,
                 img.height,
-                t_size.0,
-                t_size.1
+                t.width,
+                t.height
             )));
         }
         Ok(img)
     };
-    let r = read(reference, "the reference")?;
     let var_path = dvsgi::reference::variance_path(reference);
     let var = if var_path.is_file() { Some(read(&var_path, "the reference's variance")?) } else { None };
     let size =
         vec![("render.width".to_string(), t.width.to_string()), ("render.height".to_string(), t.height.to_string())];
     let scene = common.load_scene(&args.scene, &size)?;
     let map = RegionMap::trace(&scene, t.width, t.height);
-    let regions = region_stats(&map, &Pair { test: &t, reference: &r, reference_variance: var.as_ref() });
+    let regions = region_stats(&map, &Pair { test: t, reference: r, reference_variance: var.as_ref() });
     print_regions("regions (test / reference mean radiance)", &regions);
-    let mut picture = (t.clone(), r.clone());
     let indirect = match &args.ref_direct {
         Some(rd) => {
             let rd = read(rd, "the reference's direct light")?;
             let ti = args.test_indirect.as_deref().map(|p| read(p, "the test's indirect light")).transpose()?;
-            let (ti, ri) = indirect_pair(&t, &r, &rd, ti.as_ref());
+            let (ti, ri) = indirect_pair(t, r, &rd, ti.as_ref());
             let stats = region_stats(&map, &Pair { test: &ti, reference: &ri, reference_variance: var.as_ref() });
             print_regions("indirect light by region (test / reference)", &stats);
-            picture = (ti, ri);
-            Some(stats)
+            Some((stats, ti, ri))
         }
         None => None,
     };
     if let Some(p) = &args.ratio {
-        dvsgi::output::write_png(p, &ratio_picture(&map, &picture.0, &picture.1, 1.0))?;
+        // Of the indirect light when it is known.
+        let (pt, pr) = indirect.as_ref().map(|(_, ti, ri)| (ti, ri)).unwrap_or((t, r));
+        dvsgi::output::write_png(p, &ratio_picture(&map, pt, pr, 1.0))?;
         println!("wrote {}", p.display());
     }
+    let indirect = indirect.map(|(stats, _, _)| stats);
     Ok(RegionReport { regions, indirect })
 }
 

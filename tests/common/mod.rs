@@ -68,6 +68,18 @@ pub fn float_texels(r: &mut Renderer, img: &Arc<dvsgi::gpu::Image>, level: u32) 
     })
 }
 
+/// Sum of radiance over the pixels `keep` selects (by index), and their number.
+pub fn sum_where(out: &FrameOutput, keep: impl Fn(usize) -> bool) -> (Vec3, usize) {
+    let (mut s, mut n) = (Vec3::ZERO, 0);
+    for (i, p) in out.radiance.chunks_exact(4).enumerate() {
+        if keep(i) {
+            s += Vec3::new(p[0], p[1], p[2]);
+            n += 1;
+        }
+    }
+    (s, n)
+}
+
 /// A context with the validation layer on (tests always validate).
 pub fn context() -> Arc<Context> {
     Context::new(&ContextDesc { validation: true, device: None })
