@@ -7,18 +7,13 @@
 
 mod common;
 
-use common::{dvsgi, repo};
+use common::{dvsgi, repo, stderr};
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
 // The fuzz targets' fixture and per-target functions (tools/fuzz/src/lib.rs).
 #[allow(dead_code)]
 #[path = "../tools/fuzz/src/lib.rs"]
 mod fuzz;
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 /// Runs `dvsgi render SCENE --out DIR/out.png EXTRA`; checks the
 /// failure (exit code 1, an `error: ` line, no panic, nothing written) and that the message

@@ -78,6 +78,14 @@ fn bench_smoke_writes_schema_valid_json_and_a_timeline() {
             assert_eq!(m.image_error_vs_sync.is_some(), m.mode != "sync");
             assert_eq!(m.frame_ratio_to_sync.is_some(), m.mode != "sync");
         }
+        if common::under_split_queues() {
+            assert!(typed.device.queue_topology.contains("dedicated compute-only family"), "{:?}", typed.device);
+        }
+        if scenario == "static" {
+            // Async work on its own queue computes the same image.
+            let e = typed.modes[1].image_error_vs_sync.as_ref().unwrap();
+            assert_eq!(e.mean_relative, 0.0, "async vs sync: {e:?}");
+        }
         if scenario == "dynamic" {
             // The lagged image trails the moving light.
             let lag = typed.modes[2].image_error_vs_sync.as_ref().unwrap().mean_relative;

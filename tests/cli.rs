@@ -3,17 +3,8 @@
 
 mod common;
 
-use common::{dvsgi_with, repo};
+use common::{dvsgi_with, repo, stderr, stdout};
 use std::path::{Path, PathBuf};
-use std::process::Output;
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
 
 /// Runs a render that must fail: returns stderr after checking exit code, no panic, no file.
 fn render_fails(scene: &Path, extra: &[&str], env: &[(&str, &str)]) -> String {
@@ -92,7 +83,11 @@ fn info_reports_device_and_queue_topology() {
     for f in ["timelineSemaphore", "synchronization2", "dynamicRendering", "maintenance4"] {
         assert!(out.contains(f), "{f} missing:\n{out}");
     }
-    if out.contains("llvmpipe") {
+    if common::under_split_queues() {
+        // tools/with-split-queues.sh: a second, compute-only family backed by the one queue.
+        assert!(out.contains("dedicated compute-only family"), "{out}");
+        assert!(out.contains("compute queue: family 1 index 0"), "{out}");
+    } else if out.contains("llvmpipe") {
         // lavapipe has one queue family with one queue.
         assert!(out.contains("single-queue fallback"), "{out}");
         assert!(out.contains("compute queue: family 0 index 0"), "{out}");
@@ -391,6 +386,9 @@ fn every_schedule_is_clean_under_queue_submit_synchronization_validation() {
         assert!(!err.contains("validation"), "{mode}: {err}");
         let out = stdout(&o);
         assert!(out.contains(&format!("schedule: {mode}")), "{out}");
+        if mode != "sync" && common::under_split_queues() {
+            assert!(out.contains("dedicated compute-only family"), "{out}");
+        }
         if mode != "sync" && out.contains("single-queue") {
             // lavapipe: the output says the compute work shares the one queue.
             assert!(out.contains("compute work goes to the graphics queue"), "{out}");

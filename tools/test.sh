@@ -1,7 +1,22 @@
 #!/usr/bin/env bash
 # The test command: set-up (system packages) then every test, on the Vulkan device the loader
-# finds (lavapipe on a machine without a GPU) with the Khronos validation layer on.
+# finds (lavapipe on a machine without a GPU) with the Khronos validation layer on; then the
+# async path again on a split device (tools/with-split-queues.sh: a separate compute-only
+# queue family, as on an NVIDIA GPU) with the two queues run in the two adversarial orders, so
+# a missing semaphore wait, release or acquire fails a test. Extra arguments go to cargo
+# (e.g. --release).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/setup.sh
+# The queue-splitting layer first: tests/split_queues.rs runs dvsgi under it.
+cargo build --locked -p dvsgi-split-queues
 cargo test --locked "$@"
+cargo test --locked -p dvsgi-split-queues "$@"
+for order in compute-first graphics-first; do
+  echo "test.sh: the schedule tests, synchronization validation and bench on the split device ($order)"
+  export DVSGI_SPLIT_QUEUES_ORDER="$order"
+  tools/with-split-queues.sh cargo test --locked "$@" --test schedule
+  tools/with-split-queues.sh cargo test --locked "$@" --test cli --test bench -- \
+    every_schedule_is_clean_under_queue_submit_synchronization_validation \
+    info_reports_device_and_queue_topology bench_smoke
+done

@@ -266,8 +266,13 @@ impl StateTracker {
             }
             t.wait = t.wait.max(Some(st.val[oi]));
             t.log.push(format!("{name}: wait for {} {} ({:?} then {next:?})", o.name(), st.val[oi], st.all(o)));
-            if transfer || layout_change || same.is_some() {
+            if transfer {
+                let (from, to) = (o.name(), q.name());
+                t.log.push(format!("{name}: acquire {from} -> {to} ({old_layout:?} -> {new_layout:?}) for {next:?}"));
+            } else if layout_change || same.is_some() {
                 t.log.push(format!("{name}: {prev_q:?} -> {next:?} ({old_layout:?} -> {new_layout:?})"));
+            }
+            if transfer || layout_change || same.is_some() {
                 t.barriers.push((key, b));
             }
         } else if let Some(b) = same {

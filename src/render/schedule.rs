@@ -530,9 +530,11 @@ impl Scheduler {
             unsafe { d.queue_submit2(s.queue, &[submit], vk::Fence::null()) }.vk("vkQueueSubmit2")?;
         }
         let kind = s.kind;
+        // The record is read back from what vkQueueSubmit2 was handed, not from the plan.
+        let wait = handed_wait(&submit, other.timeline);
         self.streams[qi].submitted = batch.value;
         self.slots[self.slot].end[qi] = batch.value;
-        self.submits.push(SubmitRecord { queue: kind, signal: batch.value, wait: batch.wait, passes: batch.passes });
+        self.submits.push(SubmitRecord { queue: kind, signal: batch.value, wait, passes: batch.passes });
         Ok(())
     }
 
@@ -660,6 +662,19 @@ impl Scheduler {
         self.completed.push(FrameTiming { frame, passes, calibrated: offset.is_some() });
         Ok(())
     }
+}
+
+/// The value of `timeline` that a submit waits for, as handed to `vkQueueSubmit2` (the
+/// scheduler waits on nothing else).
+fn handed_wait(submit: &vk::SubmitInfo2, timeline: vk::Semaphore) -> Option<u64> {
+    let n = submit.wait_semaphore_info_count as usize;
+    if n == 0 || submit.p_wait_semaphore_infos.is_null() {
+        return None;
+    }
+    // SAFETY: the pointer and count come from the slice the submit info was built from.
+    let waits = unsafe { std::slice::from_raw_parts(submit.p_wait_semaphore_infos, n) };
+    debug_assert!(waits.iter().all(|w| w.semaphore == timeline), "a wait on another semaphore");
+    waits.iter().filter(|w| w.semaphore == timeline).map(|w| w.value).max()
 }
 
 /// The calibrated-timestamps loader, when the device and host domains can be calibrated.

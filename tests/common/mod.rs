@@ -29,6 +29,16 @@ pub fn dvsgi_with(args: &[&str], env: &[(&str, &str)]) -> Output {
     c.output().expect("run dvsgi")
 }
 
+/// A command's stderr as text.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A command's stdout as text.
+pub fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
 /// A mesh of separate triangles with flat normals (or `normal` for every vertex, which may be
 /// degenerate on purpose) and zero UVs.
 pub fn mesh(name: &str, tris: &[[Vec3; 3]], material: u32, normal: Option<Vec3>) -> dvsgi::scene::Mesh {
@@ -80,10 +90,36 @@ pub fn sum_where(out: &FrameOutput, keep: impl Fn(usize) -> bool) -> (Vec3, usiz
     (s, n)
 }
 
-/// A context with the validation layer on (tests always validate).
+/// A context with the validation layer on (tests always validate). Under
+/// tools/with-split-queues.sh it must be the split device: a test run meant for the
+/// cross-family path never passes on one queue by accident.
 pub fn context() -> Arc<Context> {
-    Context::new(&ContextDesc { validation: true, device: None })
-        .expect("a Vulkan 1.3 device (lavapipe: apt-get install mesa-vulkan-drivers)")
+    let ctx = Context::new(&ContextDesc { validation: true, device: None })
+        .expect("a Vulkan 1.3 device (lavapipe: apt-get install mesa-vulkan-drivers)");
+    if under_split_queues() {
+        assert_eq!(
+            ctx.topology,
+            dvsgi::gpu::QueueTopology::DedicatedComputeFamily,
+            "DVSGI_SPLIT_QUEUES is set but the queue-splitting layer is not active"
+        );
+    }
+    ctx
+}
+
+/// Whether the tests run under tools/with-split-queues.sh.
+pub fn under_split_queues() -> bool {
+    std::env::var_os("DVSGI_SPLIT_QUEUES").is_some_and(|v| !v.is_empty() && v != "0")
+}
+
+/// Run the `dvsgi` binary under tools/with-split-queues.sh (validation on), with extra
+/// environment variables.
+pub fn dvsgi_split(args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut c = Command::new(repo().join("tools/with-split-queues.sh"));
+    c.arg(env!("CARGO_BIN_EXE_dvsgi")).args(args).current_dir(repo()).env("DVSGI_VALIDATION", "1");
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    c.output().expect("run tools/with-split-queues.sh")
 }
 
 pub fn load(path: &Path, overrides: &[(&str, &str)]) -> Scene {

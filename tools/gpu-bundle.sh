@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# Packs what tools/gpu-report.sh needs on a GPU machine that has no Rust toolchain and no
+# Vulkan loader or validation layer (only the NVIDIA driver and its ICD):
+#
+#   tools/gpu-bundle.sh [DIR]        (default DIR: .gpu, which git ignores)
+#
+# DIR then holds bundle.tar.xz with: the release binaries (dvsgi, bench, soak), every test
+# executable (they find the repository through the path they were built in, recorded in
+# manifest-dir), the shared scenes the report renders (Cornell box, Dabrovic's Sponza), and
+# the Debian packages of the Vulkan loader and the Khronos validation layer. On the GPU
+# machine, from the repository root:
+#
+#   tools/gpu-report.sh --bundle DIR OUT_DIR
+#
+# Needs: cargo, python3, apt-get (Debian/Ubuntu, amd64 packages), xz, ../shared/scenes.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+dir="${1:-$root/.gpu}"
+mkdir -p "$dir"
+dir="$(cd "$dir" && pwd)"
+stage="$(mktemp -d)"
+trap 'rm -rf "$stage"' EXIT
+cd "$root"
+mkdir -p "$stage"/{bin,tests,debs,shared/scenes}
+
+echo "gpu-bundle: building release binaries and test executables"
+cargo build --release --locked --bins
+cargo test --release --locked --no-run --message-format=json 2>/dev/null |
+  python3 -c '
+import json, sys
+for line in sys.stdin:
+    try:
+        m = json.loads(line)
+    except ValueError:
+        continue
+    if m.get("reason") == "compiler-artifact" and m.get("executable") and m["profile"].get("test"):
+        kind = m["target"]["kind"][0]
+        name = "unit" if kind == "lib" else m["target"]["name"]
+        print(name + "\t" + m["executable"])
+' >"$stage/tests.tsv"
+while IFS=$'\t' read -r name exe; do
+  case "$name" in
+    split_queues|dvsgi_split_queues|shaderc_link) continue ;; # lavapipe-only / build helpers
+  esac
+  cp "$exe" "$stage/tests/$name"
+done <"$stage/tests.tsv"
+for b in dvsgi bench soak; do cp "target/release/$b" "$stage/bin/"; done
+strip "$stage"/bin/* "$stage"/tests/* 2>/dev/null || true
+echo "$root" >"$stage/manifest-dir"
+git rev-parse HEAD >"$stage/commit" 2>/dev/null || echo unknown >"$stage/commit"
+git status --porcelain --untracked-files=no | grep -q . && echo "(with uncommitted changes)" >>"$stage/commit" || true
+
+echo "gpu-bundle: shared scenes"
+scenes="$root/../shared/scenes"
+cp "$scenes/README.md" "$stage/shared/scenes/" 2>/dev/null || true
+cp -r "$scenes/cornell-box" "$scenes/sponza-dabrovic" "$stage/shared/scenes/"
+
+echo "gpu-bundle: Vulkan loader and validation layer packages (amd64)"
+lists="$(mktemp -d)"
+o=(-q -oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists="$lists" -oAPT::Sandbox::User=root)
+mkdir -p "$lists/partial"
+apt-get "${o[@]}" update -qq
+(cd "$stage/debs" && apt-get "${o[@]}" download libvulkan1 vulkan-validationlayers)
+rm -rf "$lists"
+
+tar -C "$stage" -cJf "$dir/bundle.tar.xz" .
+ls -la "$dir/bundle.tar.xz"
+echo "gpu-bundle: $(wc -l <"$stage/tests.tsv") test executables; carry $dir and run tools/gpu-report.sh --bundle $dir OUT_DIR"

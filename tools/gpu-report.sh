@@ -1,0 +1,207 @@
+#!/usr/bin/env bash
+# One command that measures dvsgi on a GPU and writes everything under OUT_DIR, named by the
+# device, ready to commit to docs/bench/:
+#
+#   tools/gpu-report.sh [--bundle DIR] OUT_DIR
+#
+#   info.txt               dvsgi info (devices, queue families, topology, limits) + per-scene costs
+#   tests.log              the test suite, validation on (any validation message fails a test)
+#   bench-*.json/.svg/.txt bench, static and dynamic, Cornell box and Sponza, 1920x1080,
+#                          128^3 and 256^3 voxels, sync / async / async-lagged (JSON, timeline, table)
+#   serial-*.json/.txt     the serial profile (every pass submitted alone and host-timed)
+#   sweep-cornell/         a short speed/accuracy sweep against the path-traced reference
+#   steps.tsv, report.log  each step's exit status and seconds; README.md summarises
+#
+# Headless: no display, no window system. On a machine with only the NVIDIA driver (no Rust,
+# no Vulkan loader, no validation layer), make a bundle where the code is built
+# (tools/gpu-bundle.sh .gpu), carry .gpu, and pass --bundle .gpu: the script unpacks the
+# binaries, test executables, scenes, and the loader and validation layer packages (as root).
+# Without --bundle it uses target/release (building with cargo when it can).
+#
+# Every step has a time limit (the whole report fits in 25 minutes on one GPU); a failed step
+# is recorded and the next one runs. DVSGI_REPORT_QUICK=1 shrinks every size for a dry run
+# on lavapipe. Exit status: 0 when every step passed.
+set -uo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+bundle=""
+if [ "${1:-}" = "--bundle" ]; then
+  bundle="${2:?--bundle needs a directory}"
+  shift 2
+fi
+if [ $# -ne 1 ]; then
+  echo "usage: tools/gpu-report.sh [--bundle DIR] OUT_DIR" >&2
+  exit 2
+fi
+mkdir -p "$1" || exit 1
+out="$(cd "$1" && pwd)"
+cd "$root"
+quick="${DVSGI_REPORT_QUICK:-0}"
+bin="$root/target/release"
+tests_dir=""
+
+log() { echo "[gpu-report $(date -u +%H:%M:%S)] $*" | tee -a "$out/report.log" >&2; }
+printf 'step\tstatus\tseconds\n' >"$out/steps.tsv"
+failed=0
+# step NAME SECONDS CMD...: run with a time limit, log, record status; never stops the report.
+step() {
+  local name=$1 limit=$2
+  shift 2
+  log "$name: $*"
+  local t0=$SECONDS
+  timeout --kill-after=10 "$limit" "$@"
+  local rc=$?
+  printf '%s\t%s\t%s\n' "$name" "$rc" "$((SECONDS - t0))" >>"$out/steps.tsv"
+  if [ $rc -ne 0 ]; then
+    failed=$((failed + 1))
+    log "$name: FAILED (exit $rc$([ $rc -eq 124 ] && echo ", over its ${limit} s limit"))"
+  fi
+  return 0
+}
+
+unpack_bundle() {
+  local b
+  b="$(cd "$bundle" && pwd)/bundle.tar.xz"
+  [ -f "$b" ] || { log "no $b: make it with tools/gpu-bundle.sh"; exit 1; }
+  local u="$root/target/gpu-bundle"
+  rm -rf "$u" && mkdir -p "$u" && tar -C "$u" -xJf "$b" || exit 1
+  if [ "$(id -u)" -eq 0 ]; then
+    for f in "$u"/debs/*.deb; do dpkg -x "$f" /; done
+    ldconfig
+  else
+    log "not root: the loader and validation layer packages in $u/debs are not installed"
+  fi
+  bin="$u/bin"
+  tests_dir="$u/tests"
+  # Test executables find the repository (and the dvsgi binary) by the path they were built in.
+  local built
+  built="$(cat "$u/manifest-dir")"
+  if [ "$built" != "$root" ] && [ ! -e "$built" ]; then
+    mkdir -p "$(dirname "$built")" && ln -s "$root" "$built"
+  fi
+  mkdir -p "$root/target/release"
+  for b in dvsgi bench soak; do [ -e "$root/target/release/$b" ] || cp "$u/bin/$b" "$root/target/release/$b"; done
+  # Scene files look for assets in ../shared/scenes beside the repository.
+  if [ ! -e "$root/../shared/scenes" ]; then
+    mkdir -p "$root/../shared" && ln -s "$u/shared/scenes" "$root/../shared/scenes"
+  fi
+  cp "$u/commit" "$out/commit.txt"
+}
+
+if [ -n "$bundle" ]; then
+  unpack_bundle
+elif [ ! -x "$bin/dvsgi" ] || [ ! -x "$bin/bench" ]; then
+  command -v cargo >/dev/null || { log "no $bin/dvsgi and no cargo: use --bundle (tools/gpu-bundle.sh)"; exit 1; }
+  cargo build --release --locked --bins || exit 1
+fi
+[ -f "$out/commit.txt" ] || git rev-parse HEAD >"$out/commit.txt" 2>/dev/null || true
+# The NVIDIA driver's ICD where the loader may not look by itself.
+nv_icd=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+if [ -z "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ] && [ -f "$nv_icd" ]; then
+  export VK_DRIVER_FILES="$nv_icd"
+fi
+
+# ----- 1. The device. -----
+step info 60 "$bin/dvsgi" info >"$out/info.txt" 2>&1
+device="$(sed -n 's/^chosen device: \[[0-9]*\] //p' "$out/info.txt" | head -1)"
+device="${device:-unknown device}"
+log "device: $device"
+echo "$device" >"$out/DEVICE"
+command -v nvidia-smi >/dev/null && nvidia-smi >"$out/nvidia-smi.txt" 2>&1
+for s in cornell-box sponza; do
+  for v in 128 256; do
+    step "info-$s-v$v" 120 "$bin/dvsgi" info "scenes/$s.toml" --set "gi.voxel_resolution=$v" \
+      >>"$out/info.txt" 2>&1
+  done
+done
+
+# ----- 2. The test suite, validation on. -----
+run_tests() {
+  if [ -n "$tests_dir" ]; then
+    local rc=0 t
+    for t in "$tests_dir"/*; do
+      echo "=== $(basename "$t")"
+      DVSGI_VALIDATION=1 "$t" || rc=1
+    done
+    return $rc
+  fi
+  command -v cargo >/dev/null || { echo "no test executables (use --bundle) and no cargo"; return 1; }
+  local args=(--release --locked --lib) f
+  for f in tests/*.rs; do
+    f="$(basename "$f" .rs)"
+    [ "$f" = split_queues ] || args+=(--test "$f") # the layer splits one-queue CPU devices only
+  done
+  DVSGI_VALIDATION=1 cargo test "${args[@]}"
+}
+if [ "$quick" = 1 ]; then
+  log "tests: skipped (DVSGI_REPORT_QUICK=1)"
+else
+  step tests 900 run_tests >"$out/tests.log" 2>&1
+fi
+
+# ----- 3. Bench: static and dynamic, Cornell box and Sponza, 128^3 and 256^3, all modes. -----
+if [ "$quick" = 1 ]; then
+  w=64 h=36 res=(16 32) frames=2 warmup=1
+else
+  w=1920 h=1080 res=(128 256) frames=30 warmup=3
+fi
+for run in "cornell static cornell-box" "cornell dynamic dynamic-stress" \
+  "sponza static sponza" "sponza dynamic sponza-dynamic"; do
+  read -r name scenario scene <<<"$run"
+  for v in "${res[@]}"; do
+    tag="$name-$scenario-v$v"
+    step "bench-$tag" 300 "$bin/bench" --scene "scenes/$scene.toml" --scenario "$scenario" \
+      --modes sync,async,async-lagged --width "$w" --height "$h" --set "gi.voxel_resolution=$v" \
+      --frames "$frames" --warmup "$warmup" \
+      --json "$out/bench-$tag.json" --timeline "$out/bench-$tag.svg" >"$out/bench-$tag.txt" 2>&1
+  done
+done
+
+# ----- 4. Serial profile: every pass alone, host-timed, beside the timestamps. -----
+for run in "cornell cornell-box ${res[0]}" "sponza sponza ${res[1]}"; do
+  read -r name scene v <<<"$run"
+  step "serial-$name-v$v" 300 "$bin/bench" --scene "scenes/$scene.toml" --modes sync,async \
+    --width "$w" --height "$h" --set "gi.voxel_resolution=$v" --frames "$frames" --warmup "$warmup" \
+    --serial-profile --json "$out/serial-$name-v$v.json" >"$out/serial-$name-v$v.txt" 2>&1
+done
+
+# ----- 5. A short sweep against the path-traced reference. -----
+if [ "$quick" = 1 ]; then
+  sweep=(--grid voxel_resolution=16,32 --spp 16 --width 32 --height 32 --frames 1)
+else
+  sweep=(--grid voxel_resolution=64,128,256 --grid diffuse_cones=6,9 --spp 1024 --width 480 --height 270
+    --frames 10)
+fi
+step sweep-cornell 420 "$bin/dvsgi" sweep scenes/cornell-box.toml --out "$out/sweep-cornell" "${sweep[@]}" \
+  >"$out/sweep-cornell.txt" 2>&1
+
+# ----- Summary. -----
+{
+  echo "# dvsgi GPU report: $device"
+  echo
+  echo "Written by \`tools/gpu-report.sh\` on $(date -u '+%Y-%m-%d %H:%M UTC'), commit $(head -1 "$out/commit.txt" 2>/dev/null)."
+  echo "Driver: $(sed -n 's/^  driver: //p' "$out/info.txt" | head -1). Queue topology: $(sed -n 's/^  queue topology: //p' "$out/info.txt" | head -1)."
+  echo
+  echo "| step | exit | seconds |"
+  echo "|---|---|---|"
+  tail -n +2 "$out/steps.tsv" | awk -F'\t' '{ printf "| %s | %s | %s |\n", $1, $2, $3 }'
+  echo
+  echo "Per-mode frame times (host median, ms) and ratio to sync, from the bench JSON files:"
+  echo
+  if command -v python3 >/dev/null; then
+    python3 - "$out" <<'PY'
+import json, pathlib, sys
+out = pathlib.Path(sys.argv[1])
+print("| run | sync | async | async-lagged | async/sync | lagged/sync | GPU span sync / async (ms) |")
+print("|---|---|---|---|---|---|---|")
+for f in sorted(out.glob("bench-*.json")):
+    r = json.loads(f.read_text())
+    m = {x["mode"]: x for x in r["modes"]}
+    med = lambda k: "%.2f" % m[k]["frame_host_ms"]["median"] if k in m else "-"
+    rat = lambda k: "%.3f" % m[k]["frame_ratio_to_sync"] if k in m and m[k].get("frame_ratio_to_sync") else "-"
+    span = lambda k: "%.2f" % m[k]["gpu_span_ms"]["median"] if k in m and m[k].get("gpu_span_ms") else "-"
+    print(f"| {f.stem[6:]} | {med('sync')} | {med('async')} | {med('async-lagged')} | {rat('async')} | {rat('async-lagged')} | {span('sync')} / {span('async')} |")
+PY
+  fi
+} >"$out/README.md" 2>>"$out/report.log"
+log "done: $failed step(s) failed; see $out/README.md"
+[ "$failed" -eq 0 ]
