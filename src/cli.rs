@@ -64,13 +64,46 @@ pub fn check_validation(ctx: &Context) -> crate::Result<()> {
     Ok(())
 }
 
-/// Print an error and its causes, one per line.
+/// Print an error and its causes, one per line; a cause whose text the lines above already
+/// hold is not repeated.
 pub fn report(e: &dyn std::error::Error) {
-    eprintln!("error: {e}");
+    let mut said = e.to_string();
+    eprintln!("error: {said}");
     let mut source = e.source();
     while let Some(s) = source {
-        eprintln!("  caused by: {s}");
+        let text = s.to_string();
+        if !said.contains(&text) {
+            eprintln!("  caused by: {text}");
+            said.push('\n');
+            said.push_str(&text);
+        }
         source = s.source();
+    }
+}
+
+/// `println!` for a command's output on stdout ([`out_line`]).
+#[macro_export]
+macro_rules! outln {
+    () => { $crate::cli::out_line(format_args!("")) };
+    ($($t:tt)*) => { $crate::cli::out_line(format_args!($($t)*)) };
+}
+
+/// One line of command output. A closed stdout (`dvsgi info | head -1`) ends the output
+/// quietly, never a panic: the command goes on and still writes its files. Another write
+/// error is said once on stderr.
+pub fn out_line(args: std::fmt::Arguments) {
+    use std::io::Write;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    static CLOSED: AtomicBool = AtomicBool::new(false);
+    if CLOSED.load(Ordering::Relaxed) {
+        return;
+    }
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = out.write_fmt(args).and_then(|_| out.write_all(b"\n")) {
+        CLOSED.store(true, Ordering::Relaxed);
+        if e.kind() != std::io::ErrorKind::BrokenPipe {
+            eprintln!("warning: standard output: {e}; no more output is printed");
+        }
     }
 }
 
@@ -94,5 +127,23 @@ pub fn init_logging() {
     static LOGGER: Stderr = Stderr;
     if log::set_logger(&LOGGER).is_ok() {
         log::set_max_level(log::LevelFilter::Warn);
+    }
+}
+
+/// `clap` value parser: a finite number >= 0 (thresholds, tolerances).
+pub fn non_negative(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        Ok(_) => Err(format!("{s} is not a finite number >= 0")),
+        Err(_) => Err(format!("{s:?} is not a number")),
+    }
+}
+
+/// `clap` value parser: a finite number > 0 (time steps).
+pub fn positive(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Ok(_) => Err(format!("{s} is not a finite number > 0")),
+        Err(_) => Err(format!("{s:?} is not a number")),
     }
 }

@@ -1,6 +1,9 @@
 //! Image files: PNG is the tone-mapped sRGB display image, EXR is linear radiance
-//! (W/(sr m^2), 32-bit float RGB) for measurement. Files are written to a temporary name
-//! beside the target and renamed, so a failure never leaves a partial file.
+//! (W/(sr m^2), 32-bit float RGB) for measurement. Every output (images, reports, pictures,
+//! CSV) is encoded in memory, written to a temporary name beside its target, flushed and
+//! synced to the disk, and only then renamed into place, so a full disk or any other write
+//! error fails the command and never leaves a partial or truncated file. A command with
+//! several outputs writes all of them or none ([`write_all`]).
 
 use crate::render::FrameOutput;
 use std::path::{Path, PathBuf};
@@ -12,13 +15,24 @@ pub enum OutputError {
     UnknownFormat { path: PathBuf },
     #[error("{path}: the directory {dir} does not exist")]
     NoDirectory { path: PathBuf, dir: PathBuf },
-    #[error("{path}: could not write: {source}")]
-    Write {
+    #[error("{path} is a directory; name a file")]
+    IsDirectory { path: PathBuf },
+    #[error("{path}: cannot create files in {dir}; choose a directory you can write to")]
+    NotWritable {
+        path: PathBuf,
+        dir: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{second} and {first} are the same file; give each output its own name")]
+    SameFile { first: PathBuf, second: PathBuf },
+    #[error("{path}: could not encode the image")]
+    Encode {
         path: PathBuf,
         #[source]
         source: image::ImageError,
     },
-    #[error("{path}: {source}")]
+    #[error("{path}: could not write")]
     Io {
         path: PathBuf,
         #[source]
@@ -46,20 +60,59 @@ pub fn format_of(path: &Path) -> Result<Format, OutputError> {
     }
 }
 
-/// Check that `path` can be written (format known, directory exists) before rendering.
+/// Check that `path` can be written (format known, directory exists and is writable) before
+/// any work is done.
 pub fn check_target(path: &Path) -> Result<Format, OutputError> {
     let format = format_of(path)?;
     check_target_dir(path)?;
     Ok(format)
 }
 
-/// Check that the directory of `path` exists (any file type; reports, pictures).
+/// Check, before any work, that `path` (any file type: reports, pictures) can be written: its
+/// directory exists, it is not itself a directory, and a file can be created beside it (a
+/// probe is created and removed at once).
 pub fn check_target_dir(path: &Path) -> Result<(), OutputError> {
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let dir = parent_dir(path);
     if !dir.is_dir() {
         return Err(OutputError::NoDirectory { path: path.to_path_buf(), dir: dir.to_path_buf() });
     }
+    if path.is_dir() {
+        return Err(OutputError::IsDirectory { path: path.to_path_buf() });
+    }
+    let probe = tmp_name(path);
+    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(source) => Err(OutputError::NotWritable { path: path.to_path_buf(), dir: dir.to_path_buf(), source }),
+    }
+}
+
+/// Check a command's output paths together: each writable, and no two the same file (a
+/// reference's `X.var.exr` counts as one of its outputs).
+pub fn check_targets(paths: &[PathBuf]) -> Result<(), OutputError> {
+    for (i, p) in paths.iter().enumerate() {
+        check_target_dir(p)?;
+        if let Some(q) = paths[..i].iter().find(|q| same_file(p, q)) {
+            return Err(OutputError::SameFile { first: q.clone(), second: p.clone() });
+        }
+    }
     Ok(())
+}
+
+/// Whether two output paths name the same file (compared by directory and name, so that
+/// `a.png` and `./a.png` match even before either exists).
+fn same_file(a: &Path, b: &Path) -> bool {
+    let canon = |p: &Path| parent_dir(p).canonicalize().ok().map(|d| d.join(p.file_name().unwrap_or_default()));
+    match (canon(a), canon(b)) {
+        (Some(x), Some(y)) => x == y,
+        _ => a == b,
+    }
+}
+
+fn parent_dir(path: &Path) -> &Path {
+    path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."))
 }
 
 /// Linear RGB f32 radiance of a frame (alpha dropped).
@@ -69,7 +122,13 @@ pub fn radiance_rgb(frame: &FrameOutput) -> Vec<f32> {
 
 /// Write `frame` to `path` (.png or .exr), atomically.
 pub fn write_frame(path: &Path, frame: &FrameOutput) -> Result<(), OutputError> {
-    let format = check_target(path)?;
+    let bytes = encode_frame(path, frame)?;
+    write_bytes(path, &bytes)
+}
+
+/// `frame` encoded as the file `path` names (.png: the display image; .exr: radiance).
+pub fn encode_frame(path: &Path, frame: &FrameOutput) -> Result<Vec<u8>, OutputError> {
+    let format = format_of(path)?;
     let image = match format {
         Format::Png => {
             let rgb: Vec<u8> = frame.display.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
@@ -82,47 +141,113 @@ pub fn write_frame(path: &Path, frame: &FrameOutput) -> Result<(), OutputError> 
                 .expect("radiance buffer matches its size"),
         ),
     };
-    write_atomic(path, format, &image)
+    encode(path, format, &image)
+}
+
+/// Linear RGB f32 radiance (`width * height * 3` values) encoded as an EXR file.
+pub fn encode_exr(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<Vec<u8>, OutputError> {
+    let image = image::DynamicImage::ImageRgb32F(
+        image::Rgb32FImage::from_raw(width, height, rgb.to_vec()).expect("RGB buffer matches its size"),
+    );
+    encode(path, Format::Exr, &image)
 }
 
 /// Write linear RGB f32 radiance (`width * height * 3` values) to an EXR file, atomically.
 pub fn write_exr(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<(), OutputError> {
-    check_target_dir(path)?;
-    let image = image::DynamicImage::ImageRgb32F(
-        image::Rgb32FImage::from_raw(width, height, rgb.to_vec()).expect("RGB buffer matches its size"),
-    );
-    write_atomic(path, Format::Exr, &image)
+    write_bytes(path, &encode_exr(path, width, height, rgb)?)
+}
+
+/// An RGB8 picture encoded as a PNG file.
+pub fn encode_png(path: &Path, image: &image::RgbImage) -> Result<Vec<u8>, OutputError> {
+    encode(path, Format::Png, &image::DynamicImage::ImageRgb8(image.clone()))
 }
 
 /// Write an RGB8 picture to a PNG file, atomically.
 pub fn write_png(path: &Path, image: &image::RgbImage) -> Result<(), OutputError> {
-    check_target_dir(path)?;
-    write_atomic(path, Format::Png, &image::DynamicImage::ImageRgb8(image.clone()))
+    write_bytes(path, &encode_png(path, image)?)
 }
 
-/// Write bytes (a report, a picture) to `path` atomically: a temporary sibling, then a rename.
-pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    check_target_dir(path)?;
-    let tmp = tmp_name(path);
-    std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path)).map_err(|source| {
-        let _ = std::fs::remove_file(&tmp);
-        OutputError::Io { path: path.to_path_buf(), source }
-    })
+/// Linear radiance through the renderer's display transform (exposure, tone map, sRGB),
+/// encoded as a PNG file.
+pub fn encode_display_png(
+    path: &Path,
+    image: &crate::metrics::LinearImage,
+    exposure: f32,
+    tonemap: crate::scene::ToneMap,
+) -> Result<Vec<u8>, OutputError> {
+    let rgb = crate::metrics::display_srgb8(image, exposure, tonemap);
+    encode_png(
+        path,
+        &image::RgbImage::from_raw(image.width, image.height, rgb).expect("display buffer matches its size"),
+    )
 }
 
-/// Write linear radiance through the renderer's display transform (exposure, tone map,
-/// sRGB) to a PNG file, atomically.
+/// [`encode_display_png`], written atomically.
 pub fn write_display_png(
     path: &Path,
     image: &crate::metrics::LinearImage,
     exposure: f32,
     tonemap: crate::scene::ToneMap,
 ) -> Result<(), OutputError> {
-    let rgb = crate::metrics::display_srgb8(image, exposure, tonemap);
-    write_png(
-        path,
-        &image::RgbImage::from_raw(image.width, image.height, rgb).expect("display buffer matches its size"),
-    )
+    write_bytes(path, &encode_display_png(path, image, exposure, tonemap)?)
+}
+
+/// Write bytes (a report, a picture, an image) to `path` atomically.
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    write_all(&[(path, bytes)])
+}
+
+/// Write every file or none. Each is written to a temporary sibling, flushed and synced;
+/// only when all are on the disk are they renamed into place (and their directories
+/// synced). On any error every temporary file is removed and no target is touched.
+pub fn write_all(files: &[(&Path, &[u8])]) -> Result<(), OutputError> {
+    let mut written: Vec<PathBuf> = Vec::with_capacity(files.len());
+    for (path, bytes) in files {
+        match write_synced(path, bytes) {
+            Ok(tmp) => written.push(tmp),
+            Err(e) => {
+                for tmp in &written {
+                    let _ = std::fs::remove_file(tmp);
+                }
+                return Err(e);
+            }
+        }
+    }
+    for (i, ((path, _), tmp)) in files.iter().zip(&written).enumerate() {
+        if let Err(source) = std::fs::rename(tmp, path) {
+            for t in &written[i..] {
+                let _ = std::fs::remove_file(t);
+            }
+            return Err(OutputError::Io { path: path.to_path_buf(), source });
+        }
+    }
+    for (path, _) in files {
+        // The renames themselves reach the disk with the directory.
+        let dir = parent_dir(path);
+        if let Err(source) = std::fs::File::open(dir).and_then(|d| d.sync_all()) {
+            return Err(OutputError::Io { path: dir.to_path_buf(), source });
+        }
+    }
+    Ok(())
+}
+
+/// `bytes` in a new temporary sibling of `path`, flushed and synced; the temporary's path.
+fn write_synced(path: &Path, bytes: &[u8]) -> Result<PathBuf, OutputError> {
+    use std::io::Write;
+    check_target_dir(path)?;
+    let tmp = tmp_name(path);
+    let result = std::fs::File::create(&tmp).and_then(|mut f| {
+        f.write_all(bytes)?;
+        f.flush()?;
+        f.sync_all()
+    });
+    match result {
+        Ok(()) => Ok(tmp),
+        Err(source) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(OutputError::Io { path: path.to_path_buf(), source })
+        }
+    }
 }
 
 fn tmp_name(path: &Path) -> PathBuf {
@@ -130,20 +255,15 @@ fn tmp_name(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{file_name}.{}.tmp", std::process::id()))
 }
 
-fn write_atomic(path: &Path, format: Format, image: &image::DynamicImage) -> Result<(), OutputError> {
-    let tmp = tmp_name(path);
+/// An image encoded in memory (nothing touches the disk here).
+fn encode(path: &Path, format: Format, image: &image::DynamicImage) -> Result<Vec<u8>, OutputError> {
     let fmt = match format {
         Format::Png => image::ImageFormat::Png,
         Format::Exr => image::ImageFormat::OpenExr,
     };
-    if let Err(source) = image.save_with_format(&tmp, fmt) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(OutputError::Write { path: path.to_path_buf(), source });
-    }
-    std::fs::rename(&tmp, path).map_err(|source| {
-        let _ = std::fs::remove_file(&tmp);
-        OutputError::Io { path: path.to_path_buf(), source }
-    })
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image.write_to(&mut bytes, fmt).map_err(|source| OutputError::Encode { path: path.to_path_buf(), source })?;
+    Ok(bytes.into_inner())
 }
 
 /// Linear RGB f32 image read from an EXR (or any format `image` reads, converted).

@@ -504,8 +504,6 @@ pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Resul
     use crate::render::{RenderOptions, Renderer};
 
     let dir = &opts.out;
-    std::fs::create_dir_all(dir)
-        .map_err(|e| SweepError::File { path: dir.clone(), message: format!("cannot create the directory: {e}") })?;
     let base = common.load_scene(&opts.scene, &opts.size)?;
     let configs = opts.grid.configs();
     // Every configuration must load before anything runs (a bad value names its knob).
@@ -517,6 +515,10 @@ pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Resul
         extra.extend(c.overrides());
         scenes.push(common.load_scene(&opts.scene, &extra)?);
     }
+    // Only now that everything is known to load: nothing is created for a bad grid.
+    std::fs::create_dir_all(dir)
+        .map_err(|e| SweepError::File { path: dir.clone(), message: format!("cannot create the directory: {e}") })?;
+    crate::output::check_target_dir(&dir.join("results.csv"))?;
     let ctx = common.context()?;
     let setup = Setup {
         scene: opts.scene.display().to_string(),
@@ -597,9 +599,16 @@ pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Resul
 
     let csv_path = dir.join("results.csv");
     let mut rows = read_rows(&csv_path)?;
-    // Rows of configurations outside this grid (an earlier sweep with other --grid values
-    // in the same directory) are left out.
-    rows.retain(|r| configs.iter().any(|c| c.label() == r.label));
+    // Rows of configurations outside this grid (an earlier sweep with other --grid values in
+    // this directory, so of the same setup) are the user's measurements: they stay, and they
+    // count in the fronts and the knob effects like the others.
+    let earlier = rows.iter().filter(|r| !configs.iter().any(|c| c.label() == r.label)).count();
+    if earlier > 0 {
+        eprintln!(
+            "keeping {earlier} rows of configurations outside this grid (earlier --grid values) in {}",
+            csv_path.display()
+        );
+    }
     let todo: Vec<usize> =
         (0..configs.len()).filter(|&i| !rows.iter().any(|r| r.label == configs[i].label())).collect();
     if todo.len() < configs.len() {
@@ -643,7 +652,7 @@ pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Resul
         bar.inc(1);
     }
     bar.finish_and_clear();
-    // Keep the grid's order, whatever order the rows were finished in.
+    // The grid's order, whatever order the rows were finished in; earlier rows after them.
     let order = |r: &Row| configs.iter().position(|c| c.label() == r.label).unwrap_or(usize::MAX);
     rows.sort_by_key(order);
     mark_fronts(&mut rows);

@@ -94,12 +94,21 @@ fn miniature_sweep_writes_rows_fronts_and_pictures_and_resumes() {
     assert_eq!(again.len(), 3);
     assert!((again[0].frame_ms - rows[0].frame_ms).abs() < 1e-6, "a finished row was measured again");
 
+    // A narrower grid keeps the rows of the earlier one: they are the user's measurements.
+    let t = ok(&sweep(&out, &["bounces=1"], "16"));
+    assert!(t.contains("keeping 2 rows"), "{t}");
+    let kept: Vec<Row> =
+        csv::Reader::from_path(out.join("results.csv")).unwrap().deserialize().map(|r| r.unwrap()).collect();
+    assert_eq!(kept.iter().map(|r| r.label.as_str()).collect::<Vec<_>>(), ["v16 b1", "v16 b0", "v16 b2"]);
+    let results: Results = serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap()).unwrap();
+    assert_eq!(results.rows.len(), 3);
+
     // Another setup in the same directory is refused, naming what changed.
     let t = fails(&sweep(&out, &["bounces=0"], "32"), 1);
     assert!(t.contains("different setup") && t.contains("spp"), "{t}");
     // A bad grid fails before anything runs.
     let t = fails(&sweep(&dir.path().join("other"), &["bounces=1.5"], "16"), 1);
-    assert!(t.contains("bounces") && !dir.path().join("other/results.csv").exists(), "{t}");
+    assert!(t.contains("bounces") && !dir.path().join("other").exists(), "{t}: no directory is left behind");
     let t = fails(&sweep(&dir.path().join("other"), &["downsample=9"], "16"), 1);
     assert!(t.contains("downsample"), "{t}");
 }

@@ -108,8 +108,6 @@ fn binary_and_wrongly_encoded_files() {
         ("random bytes", random, vec!["NUL byte", "binary"]),
         ("a PNG renamed", png, vec!["this is a PNG image"]),
         ("NUL bytes", b"v 0 0 0\n# x\nv 1\x000 0\n".to_vec(), vec!["line 3: column 4: NUL byte"]),
-        ("UTF-16 with BOM", utf16("v 0 0 0\n"), vec!["UTF-16", "save it as UTF-8"]),
-        ("Latin-1", b"# ok\n# caf\xe9\n".to_vec(), vec!["line 2: column 6: byte 0xE9 is not valid UTF-8"]),
     ];
     for (what, bytes, parts) in &cases {
         // As the OBJ.
@@ -124,6 +122,33 @@ fn binary_and_wrongly_encoded_files() {
         // As the scene file.
         let t = write(d, "bad.toml", bytes);
         render_fails(&t, &[], &[&["bad.toml"], parts.as_slice()].concat());
+    }
+}
+
+/// OBJ and MTL files from real exporters come in UTF-16 (with a byte-order mark) and 8-bit
+/// encodings: they load (names keep their characters). A scene file must be UTF-8 (TOML).
+#[test]
+fn utf16_and_latin1_obj_and_mtl_files_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let s = scene(d);
+    let latin1 = |t: &str| t.chars().map(|c| c as u32 as u8).collect::<Vec<u8>>();
+    let obj = "mtllib m.mtl\no café\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl rouge é\nf 1 2 3\n";
+    let mtl = "newmtl rouge é\nKd 1 0 0\n";
+    for (what, o, m) in [("UTF-16", utf16(obj), utf16(mtl)), ("Latin-1", latin1(obj), latin1(mtl))] {
+        write(d, "m.obj", &o);
+        write(d, "m.mtl", &m);
+        let (err, px) = render_ok(&s);
+        assert!(!err.contains("not defined"), "{what}: the material name matches across files: {err}");
+        assert!(px.chunks(3).any(|p| p[0] > 0.0 && p[1] == 0.0), "{what}: the red material is used");
+    }
+    for (what, bytes, parts) in [
+        ("UTF-16 with BOM", utf16(CAMERA), vec!["bad.toml", "UTF-16", "save it as UTF-8"]),
+        ("Latin-1", b"# ok\n# caf\xe9\n".to_vec(), vec!["bad.toml", "line 2: column 6: byte 0xE9 is not valid UTF-8"]),
+    ] {
+        let t = write(d, "bad.toml", bytes);
+        let err = render_fails(&t, &[], &parts);
+        assert!(!err.is_empty(), "{what}");
     }
 }
 
@@ -403,14 +428,15 @@ fn degenerate_geometry_renders() {
 fn fuzz_regressions() {
     let fixture = tempfile::tempdir().unwrap();
     fuzz::fixture_in(fixture.path());
-    let mut n = 0;
     for (target, run) in [
         ("scene_toml", fuzz::scene_toml as fn(&Path, &[u8]) -> bool),
         ("obj_mtl", fuzz::obj_mtl),
         ("set_override", fuzz::set_override),
     ] {
+        let mut n = 0;
         for dir in [repo().join("tests/data/fuzz").join(target), repo().join("tools/fuzz/seeds").join(target)] {
-            let Ok(entries) = std::fs::read_dir(&dir) else { continue };
+            // Both are part of the repository: a missing one is a failure, never a silent skip.
+            let entries = std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
             for e in entries.flatten() {
                 let data = std::fs::read(e.path()).unwrap();
                 let r = std::panic::catch_unwind(|| run(fixture.path(), &data));
@@ -423,6 +449,6 @@ fn fuzz_regressions() {
                 n += 1;
             }
         }
+        assert!(n > 10, "{target}: only {n} stored inputs");
     }
-    assert!(n > 0);
 }

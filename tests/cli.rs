@@ -79,7 +79,10 @@ fn info_reports_device_and_queue_topology() {
         ),
         "{out}"
     );
-    assert!(!out.contains("voxel"), "no voxel passes or volumes without GI:\n{out}");
+    // The [gi] table (indented under "  [gi]") names voxel settings; nothing else may.
+    let rest: String = out.lines().filter(|l| !l.starts_with("    ")).collect::<Vec<_>>().join("\n");
+    assert!(!rest.contains("voxel"), "no voxel passes or volumes without GI:\n{out}");
+    assert!(out.contains("  [gi] (with gi.mode=\"none\"):") && out.contains("    mode = \"none\""), "{out}");
     for f in ["timelineSemaphore", "synchronization2", "dynamicRendering", "maintenance4"] {
         assert!(out.contains(f), "{f} missing:\n{out}");
     }
@@ -268,11 +271,18 @@ fn obj_index_out_of_range() {
 }
 
 #[test]
-fn missing_mtl_names_both_files() {
+fn missing_mtl_is_a_warning_naming_both_files() {
+    // As other loaders do: a warning, and the default material.
     let dir = tempfile::tempdir().unwrap();
     let p = scene_with_obj(dir.path(), "mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n", None);
-    let err = render_fails(&p, &[], &[]);
-    assert!(err.contains("gone.mtl") && err.contains("m.obj"), "{err}");
+    let out = dir.path().join("x.png");
+    let o = dvsgi_with(
+        &["render", p.to_str().unwrap(), "--out", out.to_str().unwrap(), "--width", "16", "--height", "16"],
+        &[],
+    );
+    let err = stderr(&o);
+    assert!(o.status.success() && out.exists(), "{err}");
+    assert!(err.contains("warning") && err.contains("gone.mtl") && err.contains("m.obj"), "{err}");
 }
 
 #[test]

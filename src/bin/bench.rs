@@ -7,6 +7,7 @@ use clap::{Parser, ValueEnum};
 use dvsgi::bench::{self, ImageError, Measure, ModeReport, Report, Stats};
 use dvsgi::cli::{check_validation, report, CommonArgs};
 use dvsgi::gpu::{Context, QueueTopology};
+use dvsgi::outln;
 use dvsgi::render::{Mode, RenderOptions, Renderer};
 use dvsgi::scene::Scene;
 use std::path::PathBuf;
@@ -22,7 +23,17 @@ enum Scenario {
 }
 
 #[derive(Parser)]
-#[command(name = "bench", version, about = "The async-compute experiment: time dvsgi frames per schedule mode")]
+#[command(
+    name = "bench",
+    version,
+    about = "The async-compute experiment: time dvsgi frames per schedule mode",
+    after_help = "Examples:
+  bench --scene scenes/cornell-box.toml --width 1920 --height 1080 --json b.json --timeline b.svg
+  bench --scene scenes/dynamic-stress.toml --scenario dynamic --serial-profile
+  bench --scene scenes/sponza.toml --set gi.mode='\"none\"' --modes sync
+
+BENCHMARKS.md explains the schedules, the report and how to read the timeline."
+)]
 struct Args {
     #[command(flatten)]
     common: CommonArgs,
@@ -36,16 +47,18 @@ struct Args {
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     frames: u32,
     /// Frames rendered first and not measured.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=10_000))]
     warmup: u32,
-    #[arg(long)]
+    /// Image width in pixels (overrides render.width).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     width: Option<u32>,
-    #[arg(long)]
+    /// Image height in pixels (overrides render.height).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     height: Option<u32>,
     #[arg(long, value_enum, default_value = "static")]
     scenario: Scenario,
     /// Scene seconds per frame in the dynamic scenario.
-    #[arg(long, default_value_t = 1.0 / 30.0)]
+    #[arg(long, default_value_t = 1.0 / 30.0, value_parser = dvsgi::cli::positive)]
     dt: f32,
     /// Frames recorded ahead of the GPU (the same in every mode).
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=8))]
@@ -55,7 +68,7 @@ struct Args {
     #[arg(long)]
     serial_profile: bool,
     /// Frames compared against sync to measure each mode's image error (0: skip).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=10_000))]
     error_frames: u32,
     /// Write the report as JSON (schema dvsgi-bench/1, see BENCHMARKS.md).
     #[arg(long)]
@@ -76,13 +89,19 @@ fn main() -> ExitCode {
     }
 }
 
+fn has_extension(p: &std::path::Path, ext: &str) -> bool {
+    p.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case(ext))
+}
+
 fn usage(msg: String) -> dvsgi::Error {
     dvsgi::Error::Usage(msg)
 }
 
 fn run(args: Args) -> dvsgi::Result<()> {
-    for out in args.json.iter().chain(&args.timeline) {
-        dvsgi::output::check_target_dir(out)?;
+    let outs: Vec<PathBuf> = args.json.iter().chain(&args.timeline).cloned().collect();
+    dvsgi::output::check_targets(&outs)?;
+    if let Some(t) = args.timeline.as_ref().filter(|t| !has_extension(t, "svg")) {
+        return Err(usage(format!("--timeline {}: the timeline is an SVG picture; give a .svg name", t.display())));
     }
     if args.modes.is_empty() {
         return Err(usage("--modes: give at least one of sync, async, async-lagged".into()));
@@ -160,14 +179,18 @@ fn run(args: Args) -> dvsgi::Result<()> {
         modes,
     };
     print_table(&ctx, &report);
+    // Both outputs or neither.
+    let mut files: Vec<(&std::path::Path, Vec<u8>)> = Vec::new();
     if let Some(path) = &args.json {
-        let text = serde_json::to_string_pretty(&report).expect("JSON serialisation");
-        dvsgi::output::write_bytes(path, text.as_bytes())?;
-        println!("wrote {}", path.display());
+        files.push((path, serde_json::to_string_pretty(&report).expect("JSON serialisation").into_bytes()));
     }
     if let Some(path) = &args.timeline {
-        dvsgi::output::write_bytes(path, bench::timeline_svg(&report).as_bytes())?;
-        println!("wrote {}", path.display());
+        files.push((path, bench::timeline_svg(&report).into_bytes()));
+    }
+    let refs: Vec<(&std::path::Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_slice())).collect();
+    dvsgi::output::write_all(&refs)?;
+    for (p, _) in &files {
+        outln!("wrote {}", p.display());
     }
     Ok(())
 }
@@ -212,13 +235,20 @@ fn image_error(ctx: &std::sync::Arc<Context>, scene: &Scene, args: &Args, mode: 
 }
 
 fn print_table(ctx: &Context, r: &Report) {
-    println!("device: {} ({}); queue topology: {}", r.device.name, r.device.driver, r.device.queue_topology);
+    outln!("device: {} ({}); queue topology: {}", r.device.name, r.device.driver, r.device.queue_topology);
     if !r.device.separate_queues {
-        println!("note: one queue — the async modes submit both streams to it, so they cannot overlap here");
+        outln!("note: one queue — the async modes submit both streams to it, so they cannot overlap here");
     }
-    println!(
+    outln!(
         "scene: {}  {}x{}  voxels {}³  {} scenario  {} frames (+{} warm-up), {} in flight",
-        r.scene, r.width, r.height, r.voxel_resolution, r.scenario, r.frames, r.warmup, r.frames_in_flight
+        r.scene,
+        r.width,
+        r.height,
+        r.voxel_resolution,
+        r.scenario,
+        r.frames,
+        r.warmup,
+        r.frames_in_flight
     );
     let longest = r.modes.iter().flat_map(|m| &m.passes).map(|p| p.name.len() + 17).max().unwrap_or(0);
     let w = longest.max(34);
@@ -226,13 +256,13 @@ fn print_table(ctx: &Context, r: &Report) {
     for m in &r.modes {
         head.push_str(&format!(" {:>24}", m.mode));
     }
-    println!("{head}");
+    outln!("{head}");
     let row = |label: &str, f: &dyn Fn(&ModeReport) -> String| {
         let mut line = format!("{label:<w$}");
         for m in &r.modes {
             line.push_str(&format!(" {:>24}", f(m)));
         }
-        println!("{line}");
+        outln!("{line}");
     };
     let fmt = |s: Option<Stats>| match s {
         Some(s) => format!("{:.2} ({:.2}..{:.2})", s.median, s.min, s.p95),
@@ -271,7 +301,7 @@ fn print_table(ctx: &Context, r: &Report) {
     row("submits per frame", &|m| format!("{:.1}", m.submits_per_frame));
     row("host waits: in frame / slot reuse", &|m| format!("{} / {}", m.host_waits.in_frame, m.host_waits.slot_reuse));
     if ctx.info.is_cpu() {
-        println!(
+        outln!(
             "note: {} is a CPU implementation; its GPU timestamps can be wrong — compare host wall-clock \
              figures (and --serial-profile for per-pass host times)",
             ctx.info.name

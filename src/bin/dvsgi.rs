@@ -3,12 +3,27 @@
 use clap::{Parser, Subcommand};
 use dvsgi::cli::{check_validation, init_logging, report, CommonArgs};
 use dvsgi::gpu::Context;
+use dvsgi::outln;
 use dvsgi::render::{Mode, RenderOptions, Renderer};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "dvsgi", version, about = "Deferred Voxel Shading: voxel cone traced global illumination over Vulkan")]
+#[command(
+    name = "dvsgi",
+    version,
+    about = "Deferred Voxel Shading: voxel cone traced global illumination over Vulkan",
+    after_help = "Examples:
+  dvsgi info                                            devices, queue families, topology
+  dvsgi info scenes/cornell-box.toml --preset high      passes, memory and the [gi] settings used
+  dvsgi render scenes/cornell-box.toml --out c.png --out c.exr
+  dvsgi render scenes/sponza.toml --gi none --width 1280 --height 720 --out s.png
+  dvsgi reference scenes/cornell-box.toml --spp 1024 --out ref.exr
+  dvsgi compare c.exr ref.exr --scene scenes/cornell-box.toml --json err.json
+  dvsgi sweep scenes/cornell-box.toml --grid voxel_resolution=32,64 --out sweep/
+
+Scene files: scenes/FORMAT.md. Speed: bench --help. Accuracy: ACCURACY.md."
+)]
 struct Cli {
     #[command(flatten)]
     common: CommonArgs,
@@ -25,8 +40,9 @@ struct SizeArgs {
     /// Image height (overrides render.height).
     #[arg(long)]
     height: Option<u32>,
-    /// Scene time in seconds at which motion is evaluated (overrides render.time).
-    #[arg(long)]
+    /// Scene time in seconds at which motion is evaluated (overrides render.time; may be
+    /// negative).
+    #[arg(long, allow_negative_numbers = true)]
     time: Option<f32>,
 }
 
@@ -218,7 +234,7 @@ fn run(cli: Cli) -> dvsgi::Result<()> {
                 dvsgi::sweep::SweepOptions { scene, out, grid, spp, frames, warmup, schedule, size: size.overrides() };
             let results = dvsgi::sweep::run(&cli.common, &opts)?;
             print_sweep(&results);
-            println!("wrote {}/results.csv, results.json and frontier-*.svg", opts.out.display());
+            outln!("wrote {}/results.csv, results.json and frontier-*.svg", opts.out.display());
             Ok(())
         }
         Command::Reference { scene, out, spp, bounces, seed, jitter, size } => {
@@ -231,6 +247,7 @@ fn run(cli: Cli) -> dvsgi::Result<()> {
             for o in &out {
                 dvsgi::output::check_target(o)?;
             }
+            dvsgi::output::check_targets(&out)?;
             let mut extra = size.overrides();
             if let Some(v) = view {
                 extra.push(("render.view".to_string(), format!("{v:?}")));
@@ -243,36 +260,37 @@ fn run(cli: Cli) -> dvsgi::Result<()> {
             let t = scene.settings.time;
             let options = RenderOptions { mode: schedule, ..RenderOptions::default() };
             let mut renderer = Renderer::with_options(&ctx, scene, options)?;
-            println!("schedule: {}", schedule_line(&ctx, schedule));
+            outln!("schedule: {}", schedule_line(&ctx, schedule));
             for _ in 1..frames {
                 renderer.render(t, false)?;
             }
             let stats = renderer.render(t, true)?;
             if verbose {
-                println!("device: {} ({})", ctx.info.name, ctx.info.driver_info);
-                println!("passes: {}", renderer.last_pass_names().join(" -> "));
+                outln!("device: {} ({})", ctx.info.name, ctx.info.driver_info);
+                outln!("passes: {}", renderer.last_pass_names().join(" -> "));
                 let sched = renderer.scheduler();
                 for s in sched.submits() {
                     let wait =
                         s.wait.map(|w| format!(", waits for {} {w}", s.queue.other().name())).unwrap_or_default();
-                    println!("  submit {} {}{wait}: {}", s.queue.name(), s.signal, s.passes.join(", "));
+                    outln!("  submit {} {}{wait}: {}", s.queue.name(), s.signal, s.passes.join(", "));
                 }
                 for b in sched.log() {
-                    println!("  {b}");
+                    outln!("  {b}");
                 }
-                println!("frame: {:.2} ms host wall clock (record + submit + wait)", stats.host_ms);
+                outln!("frame: {:.2} ms host wall clock (record + submit + wait)", stats.host_ms);
                 if let Some(timing) = &stats.timing {
                     for p in &timing.passes {
-                        println!("  {:<22} {:<8} {:>8.3} ms GPU timestamps", p.name, p.queue.name(), p.gpu_ms());
+                        outln!("  {:<22} {:<8} {:>8.3} ms GPU timestamps", p.name, p.queue.name(), p.gpu_ms());
                     }
                 }
             }
             check_validation(&ctx)?;
             let frame = renderer.output();
-            for o in &out {
-                dvsgi::output::write_frame(o, &frame)?;
-                println!("wrote {}", o.display());
-            }
+            let files = out
+                .iter()
+                .map(|o| Ok((o.as_path(), dvsgi::output::encode_frame(o, &frame)?)))
+                .collect::<dvsgi::Result<Vec<_>>>()?;
+            write_outputs(&files)?;
             Ok(())
         }
     }
@@ -312,10 +330,17 @@ fn compare(
     if !exposure.is_finite() {
         return Err(dvsgi::Error::Usage(format!("--exposure {exposure} is not a finite number")));
     }
-    let ratio = regions.as_ref().and_then(|r| r.ratio.as_deref());
-    for out in diff.iter().chain(json.iter()).chain(ratio.iter()) {
-        dvsgi::output::check_target_dir(out)?;
+    if regions.is_none() && (!common.sets.is_empty() || common.preset.is_some() || !common.asset_paths.is_empty()) {
+        // Without a scene they would change nothing: refuse rather than ignore.
+        return Err(dvsgi::Error::Usage(
+            "compare: --set, --preset and --asset-path apply to the scene of --scene (the regions); \
+             without --scene there is no scene to apply them to"
+                .into(),
+        ));
     }
+    let ratio = regions.as_ref().and_then(|r| r.ratio.as_deref());
+    let outs: Vec<PathBuf> = diff.iter().chain(json.iter()).chain(ratio.iter()).map(|p| p.to_path_buf()).collect();
+    dvsgi::output::check_targets(&outs)?;
     for picture in diff.iter().chain(ratio.iter()) {
         if dvsgi::output::format_of(picture)? != dvsgi::output::Format::Png {
             return Err(dvsgi::Error::Usage(format!("{}: this is a picture; give a .png name", picture.display())));
@@ -325,33 +350,54 @@ fn compare(
     let name = |p: &std::path::Path| p.display().to_string();
     let c = compare_named(&t, &name(test), &r, &name(reference), exposure, tonemap)?;
     print_comparison(test, reference, &c);
-    let region_report = match &regions {
-        Some(args) => Some(compare_regions(common, &t, &r, reference, args)?),
-        None => None,
+    let (region_report, ratio_png) = match &regions {
+        Some(args) => {
+            let (report, png) = compare_regions(common, &t, &r, reference, args)?;
+            (Some(report), png)
+        }
+        None => (None, None),
     };
+    // Every output or none.
+    let mut files: Vec<(&std::path::Path, Vec<u8>)> = Vec::new();
     if let Some(d) = diff {
-        dvsgi::output::write_png(d, &flip_error_map(&t, &r, exposure, tonemap)?)?;
-        println!("wrote {}", d.display());
+        files.push((d, dvsgi::output::encode_png(d, &flip_error_map(&t, &r, exposure, tonemap)?)?));
     }
     if let Some(j) = json {
         let text = serde_json::to_string_pretty(&CompareJson { comparison: c, regions: region_report }).expect("JSON");
-        dvsgi::output::write_bytes(j, text.as_bytes())?;
-        println!("wrote {}", j.display());
+        files.push((j, text.into_bytes()));
+    }
+    if let (Some(p), Some(png)) = (ratio, ratio_png) {
+        files.push((p, png));
+    }
+    write_outputs(&files)
+}
+
+/// Write a command's outputs, all or none, and name each.
+fn write_outputs(files: &[(&std::path::Path, Vec<u8>)]) -> dvsgi::Result<()> {
+    let refs: Vec<(&std::path::Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_slice())).collect();
+    dvsgi::output::write_all(&refs)?;
+    for (p, _) in files {
+        outln!("wrote {}", p.display());
     }
     Ok(())
 }
 
 fn print_comparison(test: &std::path::Path, reference: &std::path::Path, c: &dvsgi::metrics::Comparison) {
-    println!("{} against {} ({} pixels)", test.display(), reference.display(), c.pixels);
-    println!("  RMSE   {:.6} (linear radiance)", c.rmse);
-    println!("  relMSE {:.6} (linear radiance, epsilon {})", c.relmse, dvsgi::metrics::RELMSE_EPSILON);
+    outln!("{} against {} ({} pixels)", test.display(), reference.display(), c.pixels);
+    outln!("  RMSE   {:.6} (linear radiance)", c.rmse);
+    outln!("  relMSE {:.6} (linear radiance, epsilon {})", c.relmse, dvsgi::metrics::RELMSE_EPSILON);
     let row = |name: &str, s: &dvsgi::metrics::Summary| {
-        println!(
+        outln!(
             "  {name:<6} mean {:.4}  p50 {:.4}  p90 {:.4}  p95 {:.4}  p99 {:.4}  max {:.4}",
-            s.mean, s.p50, s.p90, s.p95, s.p99, s.max
+            s.mean,
+            s.p50,
+            s.p90,
+            s.p95,
+            s.p99,
+            s.max
         )
     };
-    println!(
+    outln!(
         "  mean radiance {:.6} against {:.6} (ratio {:.4})",
         c.test_mean,
         c.reference_mean,
@@ -359,18 +405,18 @@ fn print_comparison(test: &std::path::Path, reference: &std::path::Path, c: &dvs
     );
     row("FLIP", &c.flip);
     row("SSIM", &c.ssim);
-    println!("  (FLIP: 0 = identical, lower is better; SSIM: 1 = identical, higher is better)");
+    outln!("  (FLIP: 0 = identical, lower is better; SSIM: 1 = identical, higher is better)");
 }
 
 /// The per-region part of `compare` (the two images already read and of one size): label the
-/// pixels from the scene, report, draw the ratio.
+/// pixels from the scene, report, and draw the ratio picture (encoded, when asked for).
 fn compare_regions(
     common: &CommonArgs,
     t: &dvsgi::metrics::LinearImage,
     r: &dvsgi::metrics::LinearImage,
     reference: &std::path::Path,
     args: &RegionArgs,
-) -> dvsgi::Result<dvsgi::regions::RegionReport> {
+) -> dvsgi::Result<(dvsgi::regions::RegionReport, Option<Vec<u8>>)> {
     use dvsgi::metrics::LinearImage;
     use dvsgi::regions::{indirect_pair, ratio_picture, region_stats, Pair, RegionMap, RegionReport};
     // Further images must have the test image's size.
@@ -407,25 +453,29 @@ fn compare_regions(
         }
         None => None,
     };
-    if let Some(p) = &args.ratio {
-        // Of the indirect light when it is known.
-        let (pt, pr) = indirect.as_ref().map(|(_, ti, ri)| (ti, ri)).unwrap_or((t, r));
-        dvsgi::output::write_png(p, &ratio_picture(&map, pt, pr, 1.0))?;
-        println!("wrote {}", p.display());
-    }
+    // Of the indirect light when it is known.
+    let (pt, pr) = indirect.as_ref().map(|(_, ti, ri)| (ti, ri)).unwrap_or((t, r));
+    let png =
+        args.ratio.as_deref().map(|p| dvsgi::output::encode_png(p, &ratio_picture(&map, pt, pr, 1.0))).transpose()?;
     let indirect = indirect.map(|(stats, _, _)| stats);
-    Ok(RegionReport { regions, indirect })
+    Ok((RegionReport { regions, indirect }, png))
 }
 
 fn print_regions(title: &str, stats: &[dvsgi::regions::RegionStats]) {
-    println!("{title}:");
-    println!(
+    outln!("{title}:");
+    outln!(
         "  {:<9} {:<34} {:>7} {:>8} {:>8} {:>9} {:>9}",
-        "grouping", "region", "pixels", "ratio", "±noise", "relMSE", "RMSE"
+        "grouping",
+        "region",
+        "pixels",
+        "ratio",
+        "±noise",
+        "relMSE",
+        "RMSE"
     );
     for s in stats {
         let noise = s.ratio_noise.map(|n| format!("{n:.4}")).unwrap_or_else(|| "-".into());
-        println!(
+        outln!(
             "  {:<9} {:<34} {:>7} {:>8.4} {:>8} {:>9.5} {:>9.5}{}",
             format!("{:?}", s.grouping).to_lowercase(),
             s.name,
@@ -440,10 +490,10 @@ fn print_regions(title: &str, stats: &[dvsgi::regions::RegionStats]) {
 }
 
 fn print_sweep(results: &dvsgi::sweep::Results) {
-    println!("each knob, one step up, averaged over rows that differ only in it:");
-    println!("  {:<20} {:>14} {:>6} {:>10} {:>11} {:>11}", "knob", "step", "pairs", "d ms", "d FLIP", "d RMSE");
+    outln!("each knob, one step up, averaged over rows that differ only in it:");
+    outln!("  {:<20} {:>14} {:>6} {:>10} {:>11} {:>11}", "knob", "step", "pairs", "d ms", "d FLIP", "d RMSE");
     for e in &results.knob_effects {
-        println!(
+        outln!(
             "  {:<20} {:>14} {:>6} {:>+10.1} {:>+11.5} {:>+11.5}",
             e.knob.key(),
             format!("{} -> {}", e.from, e.to),
@@ -453,19 +503,39 @@ fn print_sweep(results: &dvsgi::sweep::Results) {
             e.delta_rmse
         );
     }
-    println!("{} configurations; Pareto-optimal for mean FLIP against frame time:", results.rows.len());
-    println!(
+    outln!("{} configurations; Pareto-optimal for mean FLIP against frame time:", results.rows.len());
+    outln!(
         "  {:<28} {:>10} {:>10} {:>9} {:>9} {:>7}",
-        "configuration", "frame ms", "static ms", "RMSE", "FLIP", "SSIM"
+        "configuration",
+        "frame ms",
+        "static ms",
+        "RMSE",
+        "FLIP",
+        "SSIM"
     );
     let mut front: Vec<_> = results.rows.iter().filter(|r| r.front_flip).collect();
     front.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
     for r in front {
-        println!(
+        outln!(
             "  {:<28} {:>10.1} {:>10.1} {:>9.5} {:>9.4} {:>7.4}",
-            r.label, r.frame_ms, r.static_frame_ms, r.rmse, r.flip_mean, r.ssim_mean
+            r.label,
+            r.frame_ms,
+            r.static_frame_ms,
+            r.rmse,
+            r.flip_mean,
+            r.ssim_mean
         );
     }
+}
+
+/// What `reference` writes into one file.
+enum RefOutput {
+    /// Linear radiance, the mean of the samples (EXR).
+    Mean,
+    /// The variance of that mean, beside each EXR (`X.var.exr`).
+    Variance,
+    /// The display image (PNG).
+    Display,
 }
 
 fn reference(
@@ -475,14 +545,22 @@ fn reference(
     options: dvsgi::reference::ReferenceOptions,
     extra: Vec<(String, String)>,
 ) -> dvsgi::Result<()> {
+    // Every file this writes (an EXR's variance beside it), distinct and writable, up front.
+    let mut targets: Vec<(PathBuf, RefOutput)> = Vec::new();
     for o in outs {
-        dvsgi::output::check_target(o)?;
+        if dvsgi::output::check_target(o)? == dvsgi::output::Format::Exr {
+            targets.push((o.clone(), RefOutput::Mean));
+            targets.push((dvsgi::reference::variance_path(o), RefOutput::Variance));
+        } else {
+            targets.push((o.clone(), RefOutput::Display));
+        }
     }
+    dvsgi::output::check_targets(&targets.iter().map(|(p, _)| p.clone()).collect::<Vec<_>>())?;
     let scene = common.load_scene(scene, &extra)?;
     let ctx = common.context()?;
     let start = std::time::Instant::now();
     let mut tracer = dvsgi::reference::PathTracer::new(&ctx, &scene, options)?;
-    println!(
+    outln!(
         "reference: {} triangles, BVH {} nodes (depth {}), {}x{}, {} spp, bounces {}, device {}",
         tracer.triangle_count,
         tracer.bvh_nodes,
@@ -504,7 +582,7 @@ fn reference(
     check_validation(&ctx)?;
     let secs = start.elapsed().as_secs_f64();
     let paths = image.spp as f64 * (image.width * image.height) as f64;
-    println!(
+    outln!(
         "traced {} spp in {secs:.1} s ({:.2} M paths/s, host wall clock); mean relative standard error {:.4}",
         image.spp,
         paths / secs / 1e6,
@@ -513,27 +591,29 @@ fn reference(
     if image.rejected > 0 {
         eprintln!("warning: {} samples had non-finite radiance and were left out", image.rejected);
     }
-    for out in outs {
-        if dvsgi::output::format_of(out)? == dvsgi::output::Format::Exr {
-            let var_path = dvsgi::reference::variance_path(out);
-            dvsgi::output::write_exr(out, image.width, image.height, &image.mean)?;
-            dvsgi::output::write_exr(&var_path, image.width, image.height, &image.variance)?;
-            println!("wrote {} and {} (variance of the pixel mean)", out.display(), var_path.display());
-        } else {
-            let linear =
-                dvsgi::metrics::LinearImage { width: image.width, height: image.height, rgb: image.mean.clone() };
-            dvsgi::output::write_display_png(out, &linear, scene.settings.exposure, scene.settings.tonemap)?;
-            println!("wrote {}", out.display());
-        }
-    }
-    Ok(())
+    // Every file or none.
+    let (w, h) = (image.width, image.height);
+    let linear = dvsgi::metrics::LinearImage { width: w, height: h, rgb: image.mean.clone() };
+    let s = &scene.settings;
+    let files = targets
+        .iter()
+        .map(|(p, what)| {
+            let bytes = match what {
+                RefOutput::Mean => dvsgi::output::encode_exr(p, w, h, &image.mean)?,
+                RefOutput::Variance => dvsgi::output::encode_exr(p, w, h, &image.variance)?,
+                RefOutput::Display => dvsgi::output::encode_display_png(p, &linear, s.exposure, s.tonemap)?,
+            };
+            Ok((p.as_path(), bytes))
+        })
+        .collect::<dvsgi::Result<Vec<_>>>()?;
+    write_outputs(&files)
 }
 
 fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
     let scene = scene.map(|s| common.load_scene(&s, &[])).transpose()?;
-    println!("Vulkan devices:");
+    outln!("Vulkan devices:");
     for c in Context::list_devices()? {
-        println!(
+        outln!(
             "  [{}] {} ({:?}, Vulkan {}.{}){}",
             c.index,
             c.name,
@@ -545,21 +625,21 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
     }
     let ctx = common.context()?;
     let i = &ctx.info;
-    println!("chosen device: [{}] {}", i.index, i.name);
-    println!("  type: {:?}", i.device_type);
-    println!("  driver: {} ({})", i.driver_name, i.driver_info);
-    println!("  Vulkan: {}", i.api_version_string());
-    println!("  queue families:");
+    outln!("chosen device: [{}] {}", i.index, i.name);
+    outln!("  type: {:?}", i.device_type);
+    outln!("  driver: {} ({})", i.driver_name, i.driver_info);
+    outln!("  Vulkan: {}", i.api_version_string());
+    outln!("  queue families:");
     for f in &i.families {
-        println!("    [{}] {:?} x{} (timestamp bits {})", f.index, f.flags, f.count, f.timestamp_valid_bits);
+        outln!("    [{}] {:?} x{} (timestamp bits {})", f.index, f.flags, f.count, f.timestamp_valid_bits);
     }
-    println!("  graphics queue: family {} index {}", ctx.graphics_queue.family, ctx.graphics_queue.index);
-    println!("  compute queue: family {} index {}", ctx.compute_queue.family, ctx.compute_queue.index);
-    println!("  queue topology: {}", ctx.topology.describe());
-    println!("  required features: timelineSemaphore synchronization2 dynamicRendering maintenance4 (enabled)");
+    outln!("  graphics queue: family {} index {}", ctx.graphics_queue.family, ctx.graphics_queue.index);
+    outln!("  compute queue: family {} index {}", ctx.compute_queue.family, ctx.compute_queue.index);
+    outln!("  queue topology: {}", ctx.topology.describe());
+    outln!("  required features: timelineSemaphore synchronization2 dynamicRendering maintenance4 (enabled)");
     let o = &i.optional;
     let yn = |b: bool| if b { "yes" } else { "no" };
-    println!(
+    outln!(
         "  optional: geometryShader {} fragmentStoresAndAtomics {} depthClamp {} conservativeRasterization {} \
          calibratedTimestamps {} shaderImageFloat32Atomics {}",
         yn(o.geometry_shader),
@@ -569,13 +649,15 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
         yn(o.calibrated_timestamps),
         yn(o.shader_image_float32_atomics)
     );
-    println!(
+    outln!(
         "  timestamp period: {} ns; maxImageDimension2D {}, maxImageDimension3D {}",
-        i.timestamp_period_ns, i.limits.max_image_dimension2_d, i.limits.max_image_dimension3_d
+        i.timestamp_period_ns,
+        i.limits.max_image_dimension2_d,
+        i.limits.max_image_dimension3_d
     );
-    println!("  validation: {}", if ctx.validation_enabled { "on" } else { "off" });
+    outln!("  validation: {}", if ctx.validation_enabled { "on" } else { "off" });
     if let Some(scene) = scene {
-        println!(
+        outln!(
             "scene {}: {} objects, {} meshes, {} triangles, {} materials, {} lights",
             scene.path.display(),
             scene.objects.len(),
@@ -584,20 +666,28 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
             scene.materials.len(),
             scene.lights.len()
         );
+        // The [gi] table as it applies: the file's, then --preset, then every --set.
+        let settings = common.settings();
+        let from = if settings.is_empty() { String::new() } else { format!(" (with {})", settings.join(" ")) };
+        outln!("  [gi]{from}:");
+        match toml::to_string(&scene.settings.gi) {
+            Ok(t) => t.lines().for_each(|l| outln!("    {l}")),
+            Err(e) => outln!("    (cannot show: {e})"),
+        }
         let estimate = dvsgi::render::budget::Estimate::of(&scene);
-        println!(
+        outln!(
             "  GPU memory estimated before allocating: {:.2} MiB (device-local heap {:.0} MiB)",
             estimate.total() as f64 / (1024.0 * 1024.0),
             ctx.info.device_local_heap as f64 / (1024.0 * 1024.0)
         );
         let before = ctx.allocated_bytes();
         let renderer = Renderer::new(&ctx, scene)?;
-        println!("  passes (first frame): {}", renderer.pass_names(false).join(" -> "));
+        outln!("  passes (first frame): {}", renderer.pass_names(false).join(" -> "));
         for img in renderer.images() {
             let kind = if img.desc.kind == dvsgi::gpu::ImageKind::D3 { "volume" } else { "image" };
-            println!("  {kind} {}: {:.2} MiB", img.name, img.bytes as f64 / (1024.0 * 1024.0));
+            outln!("  {kind} {}: {:.2} MiB", img.name, img.bytes as f64 / (1024.0 * 1024.0));
         }
-        println!(
+        outln!(
             "  GPU memory allocated for the scene and frame: {:.2} MiB",
             (ctx.allocated_bytes() - before) as f64 / (1024.0 * 1024.0)
         );

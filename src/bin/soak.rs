@@ -5,6 +5,7 @@
 
 use clap::Parser;
 use dvsgi::cli::{check_validation, report, CommonArgs};
+use dvsgi::outln;
 use dvsgi::render::Mode;
 use dvsgi::soak::{soak_mode, ModeSoak, SoakOptions};
 use serde::Serialize;
@@ -15,14 +16,21 @@ use std::process::ExitCode;
 #[command(
     name = "soak",
     version,
-    about = "Render a dynamic scene for many frames per schedule mode; memory must stay flat"
+    about = "Render a dynamic scene for many frames per schedule mode; memory must stay flat",
+    after_help = "Examples:
+  soak                                      scenes/dynamic-stress.toml, 3000 frames per mode
+  soak --frames 300 --sample-every 50 --json soak.json
+
+Exit status: 0 when every threshold held, 3 when the soak ran and broke one, 1 on an error,
+2 on a usage error."
 )]
 struct Args {
     #[command(flatten)]
     common: CommonArgs,
-    /// Scene file (with moving objects and/or lights).
-    #[arg(long, default_value = "scenes/dynamic-stress.toml")]
-    scene: PathBuf,
+    /// Scene file (with moving objects and/or lights); default: scenes/dynamic-stress.toml
+    /// of this repository, found from any directory.
+    #[arg(long)]
+    scene: Option<PathBuf>,
     /// Schedule modes, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "sync,async,async-lagged")]
     modes: Vec<Mode>,
@@ -37,14 +45,14 @@ struct Args {
     #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=16384))]
     height: u32,
     /// Scene seconds per frame.
-    #[arg(long, default_value_t = 1.0 / 30.0)]
+    #[arg(long, default_value_t = 1.0 / 30.0, value_parser = dvsgi::cli::positive)]
     dt: f32,
     /// Largest allowed growth of resident memory after the first sample (MiB).
-    #[arg(long, default_value_t = 8.0)]
+    #[arg(long, default_value_t = 8.0, value_parser = dvsgi::cli::non_negative)]
     max_rss_growth_mib: f64,
     /// Largest allowed drift of the fixed-time image (fraction of its peak radiance).
-    #[arg(long, default_value_t = 0.02)]
-    max_drift: f32,
+    #[arg(long, default_value_t = 0.02, value_parser = dvsgi::cli::non_negative)]
+    max_drift: f64,
     /// Write every sample as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -63,11 +71,25 @@ struct Report<'a> {
     modes: &'a [ModeSoak],
 }
 
+/// `scenes/dynamic-stress.toml` from the working directory when it is there (a checkout's
+/// root), else from the repository this binary was built in.
+fn default_scene() -> PathBuf {
+    let local = PathBuf::from("scenes/dynamic-stress.toml");
+    if local.is_file() {
+        return local;
+    }
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/dynamic-stress.toml")
+}
+
+/// Exit status of a soak that ran and broke one of its thresholds.
+const SOAK_FAILED: u8 = 3;
+
 fn main() -> ExitCode {
     dvsgi::cli::init_logging();
     match run(Args::parse()) {
         Ok(true) => ExitCode::SUCCESS,
-        Ok(false) => ExitCode::from(2),
+        // 2 is clap's usage error; a soak that ran and broke a threshold is 3.
+        Ok(false) => ExitCode::from(SOAK_FAILED),
         Err(e) => {
             report(&e);
             ExitCode::FAILURE
@@ -87,12 +109,13 @@ fn run(args: Args) -> dvsgi::Result<bool> {
         ("render.height".to_string(), args.height.to_string()),
         ("gi.update_interval".to_string(), "1".to_string()),
     ];
-    let scene = args.common.load_scene(&args.scene, &extra)?;
+    let scene_path = args.scene.clone().unwrap_or_else(default_scene);
+    let scene = args.common.load_scene(&scene_path, &extra)?;
     let ctx = args.common.context()?;
     let o = SoakOptions { frames: args.frames, sample_every: args.sample_every, dt: args.dt, frames_in_flight: 2 };
-    println!(
+    outln!(
         "soak: {} on {} ({}), {}x{}, {}^3 voxels, {} frames per mode, validation {}",
-        args.scene.display(),
+        scene_path.display(),
         ctx.info.name,
         ctx.info.driver_info,
         args.width,
@@ -105,10 +128,10 @@ fn run(args: Args) -> dvsgi::Result<bool> {
     let mut modes = Vec::new();
     let mut ok = true;
     for &mode in &args.modes {
-        println!("mode {}:", mode.name());
-        println!("  frame   host ms/frame   RSS MiB   GPU alloc MiB (n)   GPU blocks MiB (n)   drift     validation");
+        outln!("mode {}:", mode.name());
+        outln!("  frame   host ms/frame   RSS MiB   GPU alloc MiB (n)   GPU blocks MiB (n)   drift     validation");
         let m = soak_mode(&ctx, &scene, mode, &o, |s| {
-            println!(
+            outln!(
                 "  {:>6}  {:>12.2}   {:>8.1}   {:>9.3} ({:>3})      {:>9.3} ({:>2})      {:.2e}  {}",
                 s.frame,
                 s.host_ms,
@@ -125,14 +148,19 @@ fn run(args: Args) -> dvsgi::Result<bool> {
         let gpu = m.growth(|s| s.gpu_allocated_bytes);
         let blocks = m.growth(|s| s.gpu_block_bytes);
         let allocs = m.growth(|s| s.gpu_allocations as u64);
-        println!(
+        outln!(
             "  after the first sample: RSS {rss:+.2} MiB, GPU allocations {gpu:+} B ({allocs:+}), blocks {blocks:+} B; \
              max drift {:.2e}; {:.1} s",
             m.max_drift(),
             m.seconds
         );
-        if rss > args.max_rss_growth_mib || gpu != 0 || blocks != 0 || allocs != 0 || m.max_drift() > args.max_drift {
-            println!("  FAILED: memory grew or the image drifted");
+        if rss > args.max_rss_growth_mib
+            || gpu != 0
+            || blocks != 0
+            || allocs != 0
+            || f64::from(m.max_drift()) > args.max_drift
+        {
+            outln!("  FAILED: memory grew or the image drifted");
             ok = false;
         }
         modes.push(m);
@@ -141,7 +169,7 @@ fn run(args: Args) -> dvsgi::Result<bool> {
         let r = Report {
             schema: "dvsgi-soak/1",
             device: ctx.info.name.clone(),
-            scene: args.scene.display().to_string(),
+            scene: scene_path.display().to_string(),
             settings: args.common.settings(),
             width: args.width,
             height: args.height,

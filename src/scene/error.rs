@@ -65,6 +65,11 @@ pub enum SceneError {
     #[error("{}: {message}", path.display())]
     Mtl { path: PathBuf, message: String },
 
+    /// A path that exists but is no regular file (a directory, FIFO, device or socket, or a
+    /// symbolic link that cannot be followed), or a file far larger than its kind can be.
+    #[error("{}: {message}", path.display())]
+    NotAFile { path: PathBuf, message: String },
+
     /// A texture that is missing or cannot be decoded.
     #[error("{}: {message}", path.display())]
     Texture { path: PathBuf, message: String },
@@ -81,7 +86,8 @@ impl SceneError {
             | SceneError::InvalidValue { path, .. }
             | SceneError::Obj { path, .. }
             | SceneError::Mtl { path, .. }
-            | SceneError::Texture { path, .. } => Some(path),
+            | SceneError::Texture { path, .. }
+            | SceneError::NotAFile { path, .. } => Some(path),
             SceneError::AssetNotFound { scene_path, .. } => Some(scene_path),
             SceneError::BadOverride { .. } => None,
         }

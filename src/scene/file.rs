@@ -384,8 +384,8 @@ fn table_schema(norm: &str) -> Option<TableSchema> {
 /// Parses the scene text; with overrides, round-trips through a `toml::Value` tree with all
 /// defaults filled in, patches it, and deserializes again.
 pub(crate) fn parse(path: &Path, text: &str, overrides: &[(String, String)]) -> Result<SceneFile, SceneError> {
-    let file: SceneFile = toml::from_str(text)
-        .map_err(|e| SceneError::Toml { path: path.to_path_buf(), message: e.to_string().trim_end().to_owned() })?;
+    let file: SceneFile =
+        toml::from_str(text).map_err(|e| SceneError::Toml { path: path.to_path_buf(), message: toml_message(&e) })?;
     if overrides.is_empty() {
         return Ok(file);
     }
@@ -400,9 +400,70 @@ pub(crate) fn parse(path: &Path, text: &str, overrides: &[(String, String)]) -> 
         let list = overrides.iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(" ");
         SceneError::Toml {
             path: path.to_path_buf(),
-            message: format!("after applying --set {list}: {}", e.to_string().trim_end()),
+            message: format!("after applying --set {list}: {}", toml_message(&e)),
         }
     })
+}
+
+/// toml's error text made fit for a terminal: serde's type names (`struct CameraDef`) said as
+/// what they are in the file (a table), and the quoted source line, which can be a whole
+/// file long, cut to a window around the reported column.
+fn toml_message(e: &toml::de::Error) -> String {
+    let text = e.to_string();
+    let text = text.trim_end();
+    let mut out = String::with_capacity(text.len().min(4096));
+    let mut rest = text;
+    while let Some(at) = rest.find("expected struct ") {
+        out.push_str(&rest[..at]);
+        let after = &rest[at + "expected struct ".len()..];
+        let name_len = after.find(|c: char| !c.is_alphanumeric() && c != '_').unwrap_or(after.len());
+        out.push_str("expected a table of settings");
+        rest = &after[name_len..];
+    }
+    out.push_str(rest);
+    clip_source_lines(&out)
+}
+
+/// The quoted source lines of a toml error longer than a terminal line, shown as a window
+/// around the reported column.
+fn clip_source_lines(message: &str) -> String {
+    const WIDTH: usize = 120;
+    let long = message.lines().any(|l| l.chars().count() > WIDTH + 20);
+    if !long {
+        return message.to_owned();
+    }
+    // The column toml reports ("at line L, column C").
+    let col = message
+        .split("column ")
+        .nth(1)
+        .and_then(|r| r.split(|c: char| !c.is_ascii_digit()).next())
+        .and_then(|n| n.parse::<usize>().ok())
+        .unwrap_or(1);
+    let start = col.saturating_sub(WIDTH / 2);
+    message
+        .lines()
+        .map(|l| {
+            // toml's snippet lines: a gutter ("1 | ", "  | ") then the source or the caret.
+            let Some(bar) = l.find("| ") else { return l.to_owned() };
+            let (gutter, body) = l.split_at(bar + 2);
+            let chars: Vec<char> = body.chars().collect();
+            if chars.len() <= WIDTH && start == 0 {
+                return l.to_owned();
+            }
+            let from = start.min(chars.len());
+            let to = (from + WIDTH).min(chars.len());
+            let mut s = String::from(gutter);
+            if from > 0 {
+                s.push('…');
+            }
+            s.extend(&chars[from..to]);
+            if to < chars.len() {
+                s.push_str(&format!("… ({} more characters)", chars.len() - to));
+            }
+            s
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// A `--set` value: TOML syntax (`45`, `[1,2,3]`, `true`, `"x"`), else the raw string.
@@ -468,6 +529,24 @@ fn apply_override(root: &mut toml::Value, path: &Path, key: &str, value: toml::V
                     }
                 }
                 if last {
+                    // A single value where a table of settings belongs names the keys.
+                    let mut child = norm.clone();
+                    child.push(seg);
+                    let keys: Option<Vec<String>> = match table_schema(&child.join(".")) {
+                        Some(TableSchema::Keys(k)) => Some(k.iter().map(|s| s.to_string()).collect()),
+                        _ => t.get(seg).and_then(|v| v.as_table()).map(|c| c.keys().cloned().collect()),
+                    };
+                    if let (Some(keys), Some(v)) = (keys, &value) {
+                        if !v.is_table() {
+                            let whole = segs[..=i].join(".");
+                            let example =
+                                keys.first().map(|k| format!(", e.g. --set {whole}.{k}=...")).unwrap_or_default();
+                            let message = format!(
+                                "`{whole}` is a table of settings, not one value; set one of its keys{example}"
+                            );
+                            return Err(unknown(&segs[..=i], message, keys));
+                        }
+                    }
                     if let Some(v) = value.take() {
                         t.insert(seg.to_owned(), v);
                     }
@@ -591,6 +670,10 @@ impl Ctx<'_> {
         for c in cands {
             if c.is_file() {
                 return Ok(c);
+            }
+            if super::text::exists(&c) {
+                // It is there but no regular file: say what it is, not "not found".
+                super::text::check_regular(&c, u64::MAX)?;
             }
             if !tried.contains(&c) {
                 tried.push(c);
@@ -811,6 +894,9 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
     let mut objects: Vec<Object> = Vec::new();
     let mut obj_cache: HashMap<PathBuf, (ObjData, Vec<Option<u32>>)> = HashMap::new();
     let mut default_mat: Option<u32> = None;
+    // Objects with groups that have no material, said once after the loop (3000 objects must
+    // not give 3000 warnings).
+    let mut defaulted_objects: Vec<String> = Vec::new();
     for (i, o) in file.objects.iter().enumerate() {
         let key = format!("objects.{i}");
         let object_mat = match &o.material {
@@ -925,12 +1011,7 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
             });
         }
         if !defaulted.is_empty() {
-            log::warn!(
-                "{}: {key} ({}): no material for group(s) {}; using the default white material",
-                path.display(),
-                obj_path.display(),
-                defaulted.join(", ")
-            );
+            defaulted_objects.push(format!("{key} ({}): group(s) {}", obj_path.display(), defaulted.join(", ")));
         }
         if mesh_ids.is_empty() {
             log::warn!("{}: {key}: {} contains no triangles", path.display(), obj_path.display());
@@ -965,6 +1046,8 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         }
         objects.push(object);
     }
+
+    warn_defaulted(path, &defaulted_objects);
 
     // [[lights]]
     let mut lights = Vec::with_capacity(file.lights.len());
@@ -1082,4 +1165,20 @@ fn light(ctx: &Ctx, i: usize, l: &LightDef) -> Result<Light, SceneError> {
         cast_shadows: l.cast_shadows,
         motion,
     })
+}
+
+/// One warning for every object with groups that have no material (the first few named).
+fn warn_defaulted(path: &Path, objects: &[String]) {
+    const SHOWN: usize = 3;
+    match objects {
+        [] => {}
+        [one] => log::warn!("{}: {one}: no material; using the default white material", path.display()),
+        many => log::warn!(
+            "{}: {} objects have groups with no material; they use the default white material: {}{}",
+            path.display(),
+            many.len(),
+            many[..SHOWN.min(many.len())].join("; "),
+            if many.len() > SHOWN { format!("; and {} more", many.len() - SHOWN) } else { String::new() }
+        ),
+    }
 }

@@ -11,6 +11,7 @@ mod preset;
 pub use preset::Preset;
 mod check;
 mod text;
+mod triangulate;
 
 use std::path::{Path, PathBuf};
 
@@ -38,7 +39,7 @@ impl LoadOptions {
 
 /// Loads and validates a scene file and everything it references.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneError> {
-    let text = text::read(path, "a TOML scene file", |p, message| SceneError::Toml { path: p.to_path_buf(), message })?;
+    let text = text::read(path, &text::SCENE_FILE, |p, message| SceneError::Toml { path: p.to_path_buf(), message })?;
     let parsed = file::parse(path, &text, &opts.overrides)?;
     file::build(path, parsed, opts)
 }

@@ -116,22 +116,67 @@ fn values<'a>(args: &[&'a str]) -> Vec<&'a str> {
     args.iter().copied().take_while(|a| !a.starts_with('#')).collect()
 }
 
+/// The material name an empty `usemtl` selects: none defined, so the default material.
+pub(crate) const DEFAULT_MATERIAL: &str = "__dvsgi_default_material__";
+
+/// The statements of an OBJ file as (first line number, text, physical lines it spans): any
+/// line ending (LF, CRLF or CR alone), and `\` at a line's end joining it to the next.
+fn logical_lines(text: &str) -> Vec<(usize, String, usize)> {
+    let unified;
+    let text = if text.contains('\r') {
+        unified = text.replace("\r\n", "\n").replace('\r', "\n");
+        &unified
+    } else {
+        text
+    };
+    let mut out: Vec<(usize, String, usize)> = Vec::new();
+    let mut open = false;
+    for (i, line) in text.split('\n').enumerate() {
+        let (body, cont) = match line.trim_end().strip_suffix('\\') {
+            Some(b) => (b, true),
+            None => (line, false),
+        };
+        match out.last_mut() {
+            Some((_, t, n)) if open => {
+                t.push(' ');
+                t.push_str(body);
+                *n += 1;
+            }
+            _ => out.push((i + 1, body.to_owned(), 1)),
+        }
+        open = cont;
+    }
+    out
+}
+
 /// Validates every line `tobj` would interpret, with line numbers, and builds the canonical
-/// text for tobj (see [`Prescan::normalized`]).
+/// text for tobj (see [`Prescan::normalized`]). Keywords are read case-insensitively (`V`,
+/// `F` from some exporters); a file with no OBJ statement at all is refused.
 fn prescan(path: &Path, text: &str) -> Result<Prescan, SceneError> {
     let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
+    let mut statements = 0usize;
     let mut out =
         Prescan { mtllibs: Vec::new(), usemtl: BTreeSet::new(), normalized: String::with_capacity(text.len()) };
-    for (i, raw) in text.lines().enumerate() {
-        let ln = i + 1;
+    for (i, (ln, raw, spans)) in logical_lines(text).into_iter().enumerate() {
         if i > 0 {
             out.normalized.push('\n');
         }
+        // Lines joined by `\` become empty lines, so line numbers stay the same for tobj.
+        let pad = |out: &mut Prescan| (1..spans).for_each(|_| out.normalized.push('\n'));
+        let raw = raw.as_str();
         let mut words = raw.split_whitespace();
-        let Some(kw) = words.next() else { continue };
-        let args: Vec<&str> = words.collect();
-        // The rest of the line after the keyword (names may contain spaces).
-        let rest = raw.trim_start()[kw.len()..].trim();
+        let Some(word) = words.next() else {
+            pad(&mut out);
+            continue;
+        };
+        let kw_lower = word.to_ascii_lowercase();
+        let kw = kw_lower.as_str();
+        let args: Vec<&str> = values(&words.collect::<Vec<_>>());
+        // The rest of the line after the keyword (names may contain spaces), up to a comment.
+        let rest = raw.trim_start()[word.len()..].split(" #").next().unwrap_or("").trim();
+        if is_statement(kw) {
+            statements += 1;
+        }
         let emit = |out: &mut Prescan, vals: &[&str]| {
             out.normalized.push_str(kw);
             for v in vals {
@@ -171,29 +216,31 @@ fn prescan(path: &Path, text: &str) -> Result<Prescan, SceneError> {
                 nv += 1;
             }
             "vt" => {
-                let vals = values(&args);
-                if !(2..=3).contains(&vals.len()) {
+                let vals = &args;
+                if !(1..=3).contains(&vals.len()) {
                     return Err(obj_err(
                         path,
                         ln,
-                        format!("texture coordinate needs 2 values (u v, optionally w), found {}", vals.len()),
+                        format!("texture coordinate needs 1 to 3 values (u, optionally v and w), found {}", vals.len()),
                     ));
                 }
-                for a in &vals {
+                for a in vals {
                     parse_finite(a).map_err(|m| obj_err(path, ln, format!("texture coordinate: {m}")))?;
                 }
-                emit(&mut out, &vals[..2]);
+                // `vt u` (a 1D texture): v is 0.
+                let uv = [vals[0], vals.get(1).copied().unwrap_or("0")];
+                emit(&mut out, &uv);
                 nvt += 1;
             }
             "vn" => {
-                let vals = values(&args);
+                let vals = &args;
                 if vals.len() != 3 {
                     return Err(obj_err(path, ln, format!("normal needs 3 values (x y z), found {}", vals.len())));
                 }
-                for a in &vals {
+                for a in vals {
                     parse_finite(a).map_err(|m| obj_err(path, ln, format!("normal: {m}")))?;
                 }
-                emit(&mut out, &vals);
+                emit(&mut out, vals);
                 nvn += 1;
             }
             "f" => {
@@ -232,18 +279,49 @@ fn prescan(path: &Path, text: &str) -> Result<Prescan, SceneError> {
                 emit(&mut out, &[rest]);
             }
             "usemtl" => {
-                if rest.is_empty() {
-                    return Err(obj_err(path, ln, "usemtl without a material name"));
-                }
-                out.usemtl.insert(rest.to_owned());
-                emit(&mut out, &[rest]);
+                // An empty `usemtl` selects the default material, as other loaders do.
+                let name = if rest.is_empty() { DEFAULT_MATERIAL } else { rest };
+                out.usemtl.insert(name.to_owned());
+                emit(&mut out, &[name]);
             }
             // `l` (polylines, which tobj would triangulate), `p`, `s`, comments and anything
             // unknown are left out.
             _ => {}
         }
+        pad(&mut out);
+    }
+    if statements == 0 {
+        return Err(SceneError::Obj {
+            path: path.to_path_buf(),
+            message: "no OBJ statement (v, vt, vn, f, o, g, mtllib, usemtl, ...) in the whole file; \
+                      is this really a Wavefront OBJ file?"
+                .to_owned(),
+        });
     }
     Ok(out)
+}
+
+/// Whether `kw` (lower case) is an OBJ statement (interpreted here or not).
+fn is_statement(kw: &str) -> bool {
+    matches!(
+        kw,
+        "v" | "vt"
+            | "vn"
+            | "vp"
+            | "f"
+            | "l"
+            | "p"
+            | "o"
+            | "g"
+            | "s"
+            | "mg"
+            | "mtllib"
+            | "usemtl"
+            | "cstype"
+            | "deg"
+            | "curv"
+            | "surf"
+    )
 }
 
 /// Tries `name` relative to `dir`, also with Windows separators turned into `/`.
@@ -297,7 +375,7 @@ fn parse_color(path: &Path, ln: usize, key: &str, args: &[&str]) -> Result<Vec3,
 }
 
 fn read_mtl(path: &Path) -> Result<String, SceneError> {
-    super::text::read(path, "an MTL file", |p, message| SceneError::Mtl { path: p.to_path_buf(), message })
+    super::text::read(path, &super::text::MTL_FILE, |p, message| SceneError::Mtl { path: p.to_path_buf(), message })
 }
 
 /// Parses an MTL file. Unknown statements are ignored; colours must be finite and >= 0.
@@ -305,16 +383,16 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<MtlMaterial>, Sce
     let dir = path.parent().unwrap_or(Path::new("."));
     let fname = path.display().to_string();
     let mut mats: Vec<MtlMaterial> = Vec::new();
-    for (i, raw) in text.lines().enumerate() {
-        let ln = i + 1;
+    for (ln, raw, _) in logical_lines(text) {
         let line = raw.trim();
         let mut words = line.split_whitespace();
         let Some(kw) = words.next() else { continue };
         if kw.starts_with('#') {
             continue;
         }
-        let args: Vec<&str> = words.collect();
-        let rest = line[kw.len()..].trim();
+        // Values stop at an inline comment.
+        let args: Vec<&str> = values(&words.collect::<Vec<_>>());
+        let rest = line[kw.len()..].split(" #").next().unwrap_or("").trim();
         if kw == "newmtl" {
             if rest.is_empty() {
                 return Err(mtl_err(path, ln, "newmtl without a material name"));
@@ -356,7 +434,7 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<MtlMaterial>, Sce
                         cur.texture_ref = format!("{fname} line {ln}");
                     }
                     None => {
-                        if let Some(d) = tried.iter().find(|p| p.exists()) {
+                        if let Some(d) = tried.iter().find(|p| super::text::exists(p)) {
                             return Err(mtl_err(
                                 path,
                                 ln,
@@ -383,24 +461,34 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<MtlMaterial>, Sce
 
 /// Loads an OBJ file with its MTL libraries.
 pub(crate) fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
-    let text = super::text::read(path, "an OBJ file", |p, message| SceneError::Obj { path: p.to_path_buf(), message })?;
+    let text = super::text::read(path, &super::text::OBJ_FILE, |p, message| SceneError::Obj {
+        path: p.to_path_buf(),
+        message,
+    })?;
     let scan = prescan(path, &text)?;
     let dir = path.parent().unwrap_or(Path::new("."));
 
     // Material libraries, in the order tobj will ask for them.
     let mut materials: Vec<MtlMaterial> = Vec::new();
     let mut libs: Vec<tobj::MTLLoadResult> = Vec::new();
+    let mut missing_libs = false;
     for (ln, name) in &scan.mtllibs {
         let (found, tried) = find_relative(dir, name);
         let Some(mtl_path) = found else {
-            return Err(SceneError::Mtl {
-                path: tried.first().cloned().unwrap_or_else(|| dir.join(name)),
-                message: format!(
-                    "material library not found (referenced by `mtllib {name}` in {} line {ln}; looked at {})",
-                    path.display(),
-                    join_paths(&tried)
-                ),
-            });
+            if let Some(there) = tried.iter().find(|p| super::text::exists(p)) {
+                // It is there but no regular file: say what it is, not "not found".
+                super::text::check_regular(there, super::text::MAX_ASSET_BYTES)?;
+            }
+            // A missing library is common in downloaded models: warn, and its materials fall
+            // back to the default (as other loaders do).
+            log::warn!(
+                "{}: line {ln}: material library `{name}` not found (looked at {}); its materials use the default",
+                path.display(),
+                join_paths(&tried)
+            );
+            libs.push(Ok((Vec::new(), Default::default())));
+            missing_libs = true;
+            continue;
         };
         let mats = parse_mtl(&mtl_path, &read_mtl(&mtl_path)?)?;
         let map = mats.iter().enumerate().map(|(k, m)| (m.name.clone(), k)).collect();
@@ -409,14 +497,17 @@ pub(crate) fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
         materials.extend(mats);
     }
     let known: BTreeSet<&str> = materials.iter().map(|m| m.name.as_str()).collect();
-    if scan.mtllibs.is_empty() && !scan.usemtl.is_empty() {
+    let named: Vec<&String> = scan.usemtl.iter().filter(|u| u.as_str() != DEFAULT_MATERIAL).collect();
+    if missing_libs {
+        // Already said.
+    } else if scan.mtllibs.is_empty() && !named.is_empty() {
         log::warn!(
             "{}: uses materials ({}) but has no mtllib; they fall back to the scene's material or the default",
             path.display(),
-            scan.usemtl.iter().cloned().collect::<Vec<_>>().join(", ")
+            named.iter().map(|u| u.as_str()).collect::<Vec<_>>().join(", ")
         );
     } else {
-        for u in &scan.usemtl {
+        for u in named {
             if !known.contains(u.as_str()) {
                 log::warn!(
                     "{}: usemtl `{u}` is not defined in its material library; using the default material",
@@ -431,8 +522,10 @@ pub(crate) fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
     let next = Cell::new(0usize);
     // `..Default::default()` covers fields that exist only with some tobj features.
     #[allow(clippy::needless_update)]
+    // Faces come as polygons (face_arities) and are ear-clipped here: tobj's fan fills
+    // concave faces in.
     let opts = tobj::LoadOptions {
-        triangulate: true,
+        triangulate: false,
         single_index: true,
         ignore_points: true,
         ignore_lines: true,
@@ -462,13 +555,14 @@ pub(crate) fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
                 message: format!("group `{}`: non-finite vertex position {p}", model.name),
             });
         }
-        if m.indices.len() % 3 != 0 {
+        let indices = super::triangulate::triangulate_faces(&positions, &m.indices, &m.face_arities);
+        if indices.len() % 3 != 0 {
             return Err(SceneError::Obj {
                 path: path.to_path_buf(),
                 message: format!("group `{}`: index count is not a multiple of 3", model.name),
             });
         }
-        if let Some(bad) = m.indices.iter().find(|&&i| i as usize >= n) {
+        if let Some(bad) = indices.iter().find(|&&i| i as usize >= n) {
             return Err(SceneError::Obj {
                 path: path.to_path_buf(),
                 message: format!("group `{}`: vertex index {bad} out of range ({n} vertices)", model.name),
@@ -498,7 +592,7 @@ pub(crate) fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
             }
             None
         };
-        let (positions, normals, uvs, indices) = finish_normals(positions, normals, uvs, m.indices);
+        let (positions, normals, uvs, indices) = finish_normals(positions, normals, uvs, indices);
         let mut bounds = Aabb::EMPTY;
         for p in &positions {
             bounds.grow(*p);
@@ -623,6 +717,7 @@ fn finish_normals(
 /// line) that asked for it.
 pub(crate) fn load_texture(path: &Path, referenced_by: &str) -> Result<Texture, SceneError> {
     let err = |message: String| SceneError::Texture { path: path.to_path_buf(), message };
+    super::text::check_regular(path, super::text::MAX_ASSET_BYTES)?;
     let reader = image::ImageReader::open(path)
         .map_err(|e| err(format!("cannot read texture (referenced by {referenced_by}): {e}")))?
         .with_guessed_format()
