@@ -111,6 +111,19 @@ struct Prescan {
     normalized: String,
 }
 
+/// `s` up to an inline comment: a `#` at the start or after white space (a `#` inside a
+/// name, as in `usemtl a#1`, stays).
+fn strip_comment(s: &str) -> &str {
+    let mut prev_space = true;
+    for (i, c) in s.char_indices() {
+        if c == '#' && prev_space {
+            return &s[..i];
+        }
+        prev_space = c.is_whitespace();
+    }
+    s
+}
+
 /// The values of a statement up to an inline comment.
 fn values<'a>(args: &[&'a str]) -> Vec<&'a str> {
     args.iter().copied().take_while(|a| !a.starts_with('#')).collect()
@@ -173,7 +186,7 @@ fn prescan(path: &Path, text: &str) -> Result<Prescan, SceneError> {
         let kw = kw_lower.as_str();
         let args: Vec<&str> = values(&words.collect::<Vec<_>>());
         // The rest of the line after the keyword (names may contain spaces), up to a comment.
-        let rest = raw.trim_start()[word.len()..].split(" #").next().unwrap_or("").trim();
+        let rest = strip_comment(&raw.trim_start()[word.len()..]).trim();
         if is_statement(kw) {
             statements += 1;
         }
@@ -392,7 +405,7 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<MtlMaterial>, Sce
         }
         // Values stop at an inline comment.
         let args: Vec<&str> = values(&words.collect::<Vec<_>>());
-        let rest = line[kw.len()..].split(" #").next().unwrap_or("").trim();
+        let rest = strip_comment(&line[kw.len()..]).trim();
         if kw == "newmtl" {
             if rest.is_empty() {
                 return Err(mtl_err(path, ln, "newmtl without a material name"));

@@ -727,6 +727,9 @@ fn obj_forms_other_tools_accept() {
     let s = load(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.5\nf 1/1 2/1 3/1\n").unwrap();
     assert_eq!(s.meshes[0].uvs[0], glam::Vec2::new(0.5, 1.0), "v is 0 (flipped to 1 in image space)");
     assert_eq!(tri(&load(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl\nf 1 2 3\n").unwrap()), (1, Some(3)));
+    // A comment after a name, after a tab; a `#` inside a name stays.
+    let s = load(b"o a#1\t# the first\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    assert_eq!(s.meshes[0].name, "a#1");
     let s = load(b"V 0 0 0\nV 1 0 0\nV 0 1 0\nF 1 2 3\n").unwrap();
     assert_eq!(tri(&s), (1, Some(3)));
 }
