@@ -83,6 +83,26 @@ pub(crate) unsafe extern "system" fn free_command_buffers(
 
 // ----- Sharing modes. -----
 
+/// A create info's sharing as the driver must see it ([`rules::map_sharing`]).
+struct DriverSharing {
+    mode: vk::SharingMode,
+    families: Vec<u32>,
+}
+
+impl DriverSharing {
+    unsafe fn of(mode: vk::SharingMode, families: *const u32, count: u32) -> DriverSharing {
+        let (mode, families) = rules::map_sharing(mode, slice(families, count));
+        DriverSharing { mode, families }
+    }
+    fn pointer(&self) -> *const u32 {
+        if self.families.is_empty() {
+            std::ptr::null()
+        } else {
+            self.families.as_ptr()
+        }
+    }
+}
+
 pub(crate) unsafe extern "system" fn create_buffer(
     device: vk::Device,
     ci: *const vk::BufferCreateInfo,
@@ -93,12 +113,11 @@ pub(crate) unsafe extern "system" fn create_buffer(
         return vk::Result::ERROR_DEVICE_LOST;
     };
     let c = &*ci;
-    let (mode, families) =
-        rules::map_sharing(c.sharing_mode, slice(c.p_queue_family_indices, c.queue_family_index_count));
+    let s = DriverSharing::of(c.sharing_mode, c.p_queue_family_indices, c.queue_family_index_count);
     let real = vk::BufferCreateInfo {
-        sharing_mode: mode,
-        queue_family_index_count: families.len() as u32,
-        p_queue_family_indices: if families.is_empty() { std::ptr::null() } else { families.as_ptr() },
+        sharing_mode: s.mode,
+        queue_family_index_count: s.families.len() as u32,
+        p_queue_family_indices: s.pointer(),
         ..*c
     };
     (d.fns.create_buffer)(device, &real, alloc, out)
@@ -114,12 +133,11 @@ pub(crate) unsafe extern "system" fn create_image(
         return vk::Result::ERROR_DEVICE_LOST;
     };
     let c = &*ci;
-    let (mode, families) =
-        rules::map_sharing(c.sharing_mode, slice(c.p_queue_family_indices, c.queue_family_index_count));
+    let s = DriverSharing::of(c.sharing_mode, c.p_queue_family_indices, c.queue_family_index_count);
     let real = vk::ImageCreateInfo {
-        sharing_mode: mode,
-        queue_family_index_count: families.len() as u32,
-        p_queue_family_indices: if families.is_empty() { std::ptr::null() } else { families.as_ptr() },
+        sharing_mode: s.mode,
+        queue_family_index_count: s.families.len() as u32,
+        p_queue_family_indices: s.pointer(),
         ..*c
     };
     (d.fns.create_image)(device, &real, alloc, out)
