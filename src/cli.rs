@@ -81,6 +81,16 @@ pub fn report(e: &dyn std::error::Error) {
     }
 }
 
+/// Write a command's outputs, all or none ([`crate::output::write_all`]), and name each.
+pub fn write_outputs(files: &[(&Path, Vec<u8>)]) -> crate::Result<()> {
+    let refs: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_slice())).collect();
+    crate::output::write_all(&refs)?;
+    for (p, _) in files {
+        crate::outln!("wrote {}", p.display());
+    }
+    Ok(())
+}
+
 /// `println!` for a command's output on stdout ([`out_line`]).
 #[macro_export]
 macro_rules! outln {

@@ -3,17 +3,7 @@
 
 mod common;
 
-use common::repo;
-use std::process::Command;
-
-fn bench(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_bench"))
-        .args(args)
-        .current_dir(repo())
-        .env("DVSGI_VALIDATION", "1")
-        .output()
-        .expect("run bench")
-}
+use common::{bench, repo};
 
 fn schema() -> jsonschema::Validator {
     let text = std::fs::read_to_string(repo().join("docs/bench-schema.json")).unwrap();

@@ -3,7 +3,7 @@
 //! targets, unbounded counts, a closed stdout.
 
 mod common;
-use common::{dvsgi, repo, stderr, stdout};
+use common::{bench, dvsgi, repo, stderr, stdout};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
@@ -145,9 +145,9 @@ fn an_unwritable_target_is_refused_before_the_work() {
     assert!(!o.status.success(), "{}", stderr(&o));
 }
 
+/// `bench` on a tiny direct-light Cornell box, one sync frame, with `extra` arguments.
 fn dvsgi_bench(extra: &[&str]) -> std::process::Output {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_bench"));
-    c.args([
+    let base = [
         "--scene",
         "scenes/cornell-box.toml",
         "--modes",
@@ -164,11 +164,8 @@ fn dvsgi_bench(extra: &[&str]) -> std::process::Output {
         "16",
         "--set",
         "gi.mode=\"none\"",
-    ])
-    .args(extra)
-    .current_dir(repo())
-    .env("DVSGI_VALIDATION", "1");
-    c.output().unwrap()
+    ];
+    bench(&[&base[..], extra].concat())
 }
 
 #[test]

@@ -187,12 +187,7 @@ fn run(args: Args) -> dvsgi::Result<()> {
     if let Some(path) = &args.timeline {
         files.push((path, bench::timeline_svg(&report).into_bytes()));
     }
-    let refs: Vec<(&std::path::Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_slice())).collect();
-    dvsgi::output::write_all(&refs)?;
-    for (p, _) in &files {
-        outln!("wrote {}", p.display());
-    }
-    Ok(())
+    dvsgi::cli::write_outputs(&files)
 }
 
 /// Scene time of frame `i`.

@@ -290,7 +290,7 @@ fn run(cli: Cli) -> dvsgi::Result<()> {
                 .iter()
                 .map(|o| Ok((o.as_path(), dvsgi::output::encode_frame(o, &frame)?)))
                 .collect::<dvsgi::Result<Vec<_>>>()?;
-            write_outputs(&files)?;
+            dvsgi::cli::write_outputs(&files)?;
             Ok(())
         }
     }
@@ -369,17 +369,7 @@ fn compare(
     if let (Some(p), Some(png)) = (ratio, ratio_png) {
         files.push((p, png));
     }
-    write_outputs(&files)
-}
-
-/// Write a command's outputs, all or none, and name each.
-fn write_outputs(files: &[(&std::path::Path, Vec<u8>)]) -> dvsgi::Result<()> {
-    let refs: Vec<(&std::path::Path, &[u8])> = files.iter().map(|(p, b)| (*p, b.as_slice())).collect();
-    dvsgi::output::write_all(&refs)?;
-    for (p, _) in files {
-        outln!("wrote {}", p.display());
-    }
-    Ok(())
+    dvsgi::cli::write_outputs(&files)
 }
 
 fn print_comparison(test: &std::path::Path, reference: &std::path::Path, c: &dvsgi::metrics::Comparison) {
@@ -606,7 +596,7 @@ fn reference(
             Ok((p.as_path(), bytes))
         })
         .collect::<dvsgi::Result<Vec<_>>>()?;
-    write_outputs(&files)
+    dvsgi::cli::write_outputs(&files)
 }
 
 fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {

@@ -2,7 +2,9 @@
 //!
 //! OBJ faces may have any number of vertices and may be concave. A fan from the first vertex
 //! (what tobj does) covers area outside a concave polygon and inverts triangles; ear clipping
-//! never does for a simple polygon. Non-planar faces are clipped in their best-fit (Newell)
+//! never does for a simple polygon. The ear search starts at the second vertex, so a convex
+//! face gives exactly the fan it always did (the same diagonals for the slightly non-planar
+//! quads of the Cornell box data): only faces a fan gets wrong change. Non-planar faces are clipped in their best-fit (Newell)
 //! plane. Degenerate faces (no area) and self-intersecting ones, where no ear exists, fall
 //! back to a fan of what is left, so every face still yields n - 2 triangles.
 
@@ -77,13 +79,15 @@ fn in_triangle(p: DVec2, a: DVec2, b: DVec2, c: DVec2) -> bool {
     cross(a, b, p) >= 0.0 && cross(b, c, p) >= 0.0 && cross(c, a, p) >= 0.0
 }
 
-/// Ear clipping of a counter-clockwise polygon; O(n^2) per face, fine for OBJ faces.
+/// Ear clipping of a counter-clockwise polygon; O(n^2) per face, fine for OBJ faces. Ears
+/// are tried from the second remaining vertex on, so a convex polygon is cut as the fan
+/// (0 1 2), (0 2 3), ...
 fn ear_clip(p: &[DVec2]) -> Vec<[usize; 3]> {
     let mut left: Vec<usize> = (0..p.len()).collect();
     let mut out = Vec::with_capacity(p.len() - 2);
     while left.len() > 3 {
         let m = left.len();
-        let ear = (0..m).find(|&i| {
+        let ear = (1..m).chain(std::iter::once(0)).find(|&i| {
             let (a, b, c) = (left[(i + m - 1) % m], left[i], left[(i + 1) % m]);
             cross(p[a], p[b], p[c]) > 0.0
                 && !left.iter().any(|&k| {
@@ -147,6 +151,20 @@ mod tests {
         assert_eq!(area_and_inverted(&cw, &t), (1.0, 0));
         let n = (cw[t[0][1]] - cw[t[0][0]]).cross(cw[t[0][2]] - cw[t[0][0]]);
         assert!(n.z < 0.0, "{n}");
+    }
+
+    #[test]
+    fn convex_faces_are_cut_as_the_fan_they_always_were() {
+        let hex: Vec<DVec3> = (0..6)
+            .map(|i| {
+                let a = i as f64 / 6.0 * std::f64::consts::TAU;
+                DVec3::new(a.cos(), a.sin(), 0.0)
+            })
+            .collect();
+        assert_eq!(triangulate_polygon(&hex), fan(&(0..6).collect::<Vec<_>>()));
+        // A slightly non-planar quad keeps the fan's diagonal (0-2), not the other one.
+        let quad = [DVec3::ZERO, DVec3::new(1.0, 0.0, 0.05), DVec3::new(1.0, 1.0, 0.0), DVec3::new(0.0, 1.0, 0.05)];
+        assert_eq!(triangulate_polygon(&quad), vec![[0, 1, 2], [0, 2, 3]]);
     }
 
     #[test]

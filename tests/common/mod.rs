@@ -21,12 +21,21 @@ pub fn dvsgi(args: &[&str]) -> Output {
 
 /// [`dvsgi`] with extra environment variables.
 pub fn dvsgi_with(args: &[&str], env: &[(&str, &str)]) -> Output {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_dvsgi"));
+    run_validated(Command::new(env!("CARGO_BIN_EXE_dvsgi")), args, env)
+}
+
+/// Run the `bench` binary from the repository root with validation on.
+pub fn bench(args: &[&str]) -> Output {
+    run_validated(Command::new(env!("CARGO_BIN_EXE_bench")), args, &[])
+}
+
+/// `program` with `args` from the repository root, validation on, extra environment.
+fn run_validated(mut c: Command, args: &[&str], env: &[(&str, &str)]) -> Output {
     c.args(args).current_dir(repo()).env("DVSGI_VALIDATION", "1");
     for (k, v) in env {
         c.env(k, v);
     }
-    c.output().expect("run dvsgi")
+    c.output().unwrap_or_else(|e| panic!("run {:?}: {e}", c.get_program()))
 }
 
 /// A command's stderr as text.
@@ -115,11 +124,8 @@ pub fn under_split_queues() -> bool {
 /// environment variables.
 pub fn dvsgi_split(args: &[&str], env: &[(&str, &str)]) -> Output {
     let mut c = Command::new(repo().join("tools/with-split-queues.sh"));
-    c.arg(env!("CARGO_BIN_EXE_dvsgi")).args(args).current_dir(repo()).env("DVSGI_VALIDATION", "1");
-    for (k, v) in env {
-        c.env(k, v);
-    }
-    c.output().expect("run tools/with-split-queues.sh")
+    c.arg(env!("CARGO_BIN_EXE_dvsgi"));
+    run_validated(c, args, env)
 }
 
 pub fn load(path: &Path, overrides: &[(&str, &str)]) -> Scene {
