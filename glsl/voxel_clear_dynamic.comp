@@ -1,8 +1,10 @@
 #version 460
-// Before re-voxelizing dynamic objects: empty every voxel not marked static.
+// Before re-voxelizing dynamic objects: empty the voxels the last dynamic voxelization
+// filled (the list's dynamic range) and copy them to the stale list, whose radiance the next
+// relight zeroes unless they are occupied again. Static voxels are never in that range.
 #include "voxel.glsl"
 
-layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
+layout(local_size_x = 64) in;
 
 layout(constant_id = 2) const bool HAS_EMISSION = false;
 
@@ -10,13 +12,17 @@ layout(set = 0, binding = 0) uniform GridBlock { VoxelGrid grid; };
 layout(set = 0, binding = 1, r32ui) uniform writeonly uimage3D vox_albedo;
 layout(set = 0, binding = 2, r32ui) uniform writeonly uimage3D vox_normal;
 layout(set = 0, binding = 3, r32ui) uniform writeonly uimage3D vox_emission;
-layout(set = 0, binding = 4, r8ui) uniform readonly uimage3D vox_flags;
+#define VOXEL_LIST_BINDING 5
+#define VOXEL_STALE_BINDING 6
+#include "voxel_list.glsl"
 
 void main() {
-    ivec3 c = ivec3(gl_GlobalInvocationID);
-    if (any(greaterThanEqual(uvec3(c), uvec3(grid.dims.x)))) return;
-    if (imageLoad(vox_flags, c).r != 0u) return;
+    uint i = list_invocation();
+    if (i >= vlist.dynamic.count) return;
+    uint e = vlist.entries[vlist.static_count + i];
+    ivec3 c = unpack_voxel(e);
     imageStore(vox_albedo, c, uvec4(0u));
     imageStore(vox_normal, c, uvec4(0u));
     if (HAS_EMISSION) imageStore(vox_emission, c, uvec4(0u));
+    stale_entries[i] = e;
 }

@@ -1,5 +1,6 @@
 #version 460
-// Voxel illumination: outgoing radiance of every occupied voxel, treated as a Lambertian
+// Voxel illumination: outgoing radiance of every occupied voxel (one invocation per entry
+// of the work list, voxel_list.glsl; empty voxels keep their zero), treated as a Lambertian
 // surface with the voxel's average albedo and normal:
 //   L = albedo/pi * sum_lights(E * attenuation * visibility) + emission
 // stored as RGBA16F (alpha = 1 where occupied), clamped below the half-float maximum.
@@ -8,7 +9,7 @@
 #include "shadow.glsl"
 #include "voxel.glsl"
 
-layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
+layout(local_size_x = 64) in;
 
 layout(constant_id = 0) const bool HAS_EMISSION = false;
 layout(constant_id = 1) const bool NORMAL_WEIGHTED = true;
@@ -23,6 +24,9 @@ layout(set = 0, binding = 5, r32ui) uniform readonly uimage3D vox_albedo;
 layout(set = 0, binding = 6, r32ui) uniform readonly uimage3D vox_normal;
 layout(set = 0, binding = 7, r32ui) uniform readonly uimage3D vox_emission;
 layout(set = 0, binding = 8, rgba16f) uniform writeonly image3D vox_radiance;
+#define VOXEL_LIST_BINDING 9
+#define VOXEL_LIST_QUALIFIER readonly
+#include "voxel_list.glsl"
 
 layout(push_constant) uniform Push { float softness; } pc;
 
@@ -81,14 +85,10 @@ float attenuation(vec3 n_avg, vec3 wi) {
 }
 
 void main() {
-    ivec3 c = ivec3(gl_GlobalInvocationID);
-    int res = int(grid.dims.x);
-    if (any(greaterThanEqual(c, ivec3(res)))) return;
+    uint entry = list_invocation();
+    if (entry >= vlist.occupied.count) return;
+    ivec3 c = unpack_voxel(vlist.entries[entry]);
     uint a = imageLoad(vox_albedo, c).r;
-    if ((a >> 24) == 0u) {
-        imageStore(vox_radiance, c, vec4(0.0));
-        return;
-    }
     vec3 albedo = unpack_rgb_count(a).rgb / 255.0;
     vec3 n_avg = unpack_rgb_count(imageLoad(vox_normal, c).r).rgb / 255.0 * 2.0 - 1.0;
     vec3 N = safe_normalize(n_avg, vec3(0.0, 1.0, 0.0));

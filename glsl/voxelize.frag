@@ -2,10 +2,14 @@
 // Voxelization: each fragment is one voxel column along the dominant axis. Every voxel of the
 // column within the triangle's depth range over the pixel square is tested exactly against
 // the triangle (separating axes) and, if touched, receives a running average of linear
-// albedo, normal and emission (atomic compare-and-swap on R32_UINT).
+// albedo, normal and emission (atomic compare-and-swap on R32_UINT). The invocation that
+// gives a voxel its first albedo sample appends the voxel to the work list.
 #include "common.glsl"
 #include "scene.glsl"
 #include "voxel.glsl"
+#define VOXEL_LIST_BINDING 9
+#define VOXEL_LIST_APPEND_ONLY
+#include "voxel_list.glsl"
 
 layout(constant_id = 0) const uint TEXTURE_COUNT = 1;
 layout(constant_id = 2) const bool HAS_EMISSION = false;
@@ -32,6 +36,15 @@ layout(location = 6) flat in vec3 g_t2;
 DEFINE_ATOMIC_AVERAGE(average_albedo, vox_albedo)
 DEFINE_ATOMIC_AVERAGE(average_normal, vox_normal)
 DEFINE_ATOMIC_AVERAGE(average_emission, vox_emission)
+
+void list_append(ivec3 c) {
+    uint i = atomicAdd(vlist.occupied.count, 1u);
+    if (i < uint(vlist.entries.length())) {
+        vlist.entries[i] = pack_voxel(c);
+    } else {
+        atomicAdd(vlist.dropped, 1u);
+    }
+}
 
 void main() {
     int res = int(grid.dims.x);
@@ -72,7 +85,7 @@ void main() {
         // update would average its samples in again and the static voxel would drift toward
         // the dynamic object's albedo and normal until its sample count saturates.
         if (HAS_FLAGS && pc.mark_static == 0u && imageLoad(vox_flags, vc).r != 0u) continue;
-        average_albedo(vc, albedo);
+        if (average_albedo(vc, albedo)) list_append(vc);
         average_normal(vc, nrm * 0.5 + 0.5);
         if (HAS_EMISSION) {
             average_emission(vc, emission);  // zeros too: a half-emissive voxel emits half

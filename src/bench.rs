@@ -95,6 +95,9 @@ pub struct ModeReport {
     pub image_error_vs_sync: Option<ImageError>,
     /// One representative frame (median GPU span), for the timeline picture.
     pub timeline: Vec<TimelinePass>,
+    /// The voxel work list after the mode's last frame (absent without voxels).
+    #[serde(default)]
+    pub occupancy: Option<crate::render::voxel::Occupancy>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -477,6 +480,8 @@ pub fn measure_renderer(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::
         frame_ratio_to_sync: None,
         image_error_vs_sync: None,
         timeline,
+        // Read after the measured frames (a readback of its own, never inside a frame).
+        occupancy: r.voxel_list()?.map(|l| l.occupancy()),
     };
     Ok((report, calibrated))
 }

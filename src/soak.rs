@@ -77,7 +77,7 @@ pub fn rss_bytes() -> u64 {
 }
 
 /// With bounce feedback, the fixed-time image is rendered until what is left to converge is
-/// estimated below this (relative to the peak), or for `MAX_SETTLE_FRAMES` frames.
+/// estimated below this (relative to the peak), or for `MAX_SETTLE_FRAMES` interleave cycles.
 const SETTLED: f32 = 1e-5;
 const MAX_SETTLE_FRAMES: u32 = 32;
 
@@ -108,22 +108,28 @@ pub fn soak_mode(
     // with bounce feedback (each update gathers the previous one's bounced light, so what ran
     // before shows until it converges) until it has converged: the changes between frames
     // shrink geometrically, by r, so what is left is about d r / (1 - r) after a change d.
-    let settle = if scene.settings.gi.bounce_feedback { MAX_SETTLE_FRAMES } else { 2 };
+    // With `gi.bounce_interleave` N each update gathers for a different 1/N of the voxels, so
+    // the changes are compared a whole cycle (N frames) apart.
+    let gi = &scene.settings.gi;
+    let cycle = if gi.bounce_feedback { gi.bounce_interleave.max(1) as usize } else { 1 };
+    let settle = if gi.bounce_feedback { MAX_SETTLE_FRAMES * cycle as u32 } else { 2 };
     let fixed = |r: &mut Renderer| -> crate::Result<FrameOutput> {
-        let (mut last, mut last_change): (Option<FrameOutput>, f32) = (None, f32::INFINITY);
+        let mut last: std::collections::VecDeque<FrameOutput> = std::collections::VecDeque::new();
+        let mut last_change = f32::INFINITY;
         for _ in 0..settle {
             r.request_voxel_update();
             r.render(t0, true)?;
             let out = r.output();
-            if let Some(l) = &last {
-                let change = drift(l, &out);
+            if last.len() == cycle {
+                let change = drift(&last[0], &out);
                 let rate = (change / last_change).min(0.99);
                 if last_change.is_finite() && change * rate / (1.0 - rate) <= SETTLED {
                     return Ok(out);
                 }
                 last_change = change;
+                last.pop_front();
             }
-            last = Some(out);
+            last.push_back(out);
         }
         Ok(r.output())
     };

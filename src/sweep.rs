@@ -27,6 +27,10 @@ pub enum SweepError {
     File { path: PathBuf, message: String },
 }
 
+fn one() -> u32 {
+    1
+}
+
 /// One knob the sweep varies: the `[gi]` key it sets.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -41,10 +45,14 @@ pub enum Param {
     Downsample,
     /// `gi.ao` (0 = off, 1 = on): whether AO multiplies the traced indirect light.
     Ao,
+    /// `gi.bounce_cones` (0 = as `diffuse_cones`).
+    BounceCones,
+    /// `gi.bounce_interleave`: one in N static voxels gathers the bounce per update.
+    BounceInterleave,
 }
 
 impl Param {
-    pub const ALL: [Param; 7] = [
+    pub const ALL: [Param; 9] = [
         Param::VoxelResolution,
         Param::DiffuseCones,
         Param::DiffuseConeAngle,
@@ -52,6 +60,8 @@ impl Param {
         Param::Bounces,
         Param::Downsample,
         Param::Ao,
+        Param::BounceCones,
+        Param::BounceInterleave,
     ];
     /// The key under `[gi]`.
     pub fn key(self) -> &'static str {
@@ -63,6 +73,8 @@ impl Param {
             Param::Bounces => "bounces",
             Param::Downsample => "downsample",
             Param::Ao => "ao",
+            Param::BounceCones => "bounce_cones",
+            Param::BounceInterleave => "bounce_interleave",
         }
     }
     /// Short prefix in configuration labels.
@@ -75,6 +87,8 @@ impl Param {
             Param::Bounces => "b",
             Param::Downsample => "k",
             Param::Ao => "o",
+            Param::BounceCones => "bc",
+            Param::BounceInterleave => "i",
         }
     }
     fn integer(self) -> bool {
@@ -218,6 +232,12 @@ pub struct Row {
     pub bounces: u32,
     pub downsample: u32,
     pub ao: bool,
+    /// `gi.bounce_cones` (0: as `diffuse_cones`); absent in rows from before it existed.
+    #[serde(default)]
+    pub bounce_cones: u32,
+    /// `gi.bounce_interleave`; absent (1) in rows from before it existed.
+    #[serde(default = "one")]
+    pub bounce_interleave: u32,
     /// Median host wall clock of a frame that updates the voxels (relight, mips, bounces)
     /// and traces: the cost when lights or objects move. The front is drawn against this.
     pub frame_ms: f64,
@@ -251,6 +271,8 @@ impl Row {
             bounces: s.bounces,
             downsample: s.downsample,
             ao: s.ao,
+            bounce_cones: s.bounce_cones,
+            bounce_interleave: s.bounce_interleave,
             frame_ms: time[0],
             frame_p95_ms: time[1],
             static_frame_ms: time[2],
@@ -327,6 +349,8 @@ impl Row {
             Param::Bounces => self.bounces as f64,
             Param::Downsample => self.downsample as f64,
             Param::Ao => self.ao as u32 as f64,
+            Param::BounceCones => self.bounce_cones as f64,
+            Param::BounceInterleave => self.bounce_interleave as f64,
         }
     }
 }

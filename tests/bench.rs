@@ -67,7 +67,17 @@ fn bench_smoke_writes_schema_valid_json_and_a_timeline() {
             }
             assert_eq!(m.image_error_vs_sync.is_some(), m.mode != "sync");
             assert_eq!(m.frame_ratio_to_sync.is_some(), m.mode != "sync");
+            // The work list after the last frame: the same occupancy in every mode of a
+            // static scene (the grid is the scene's, whatever the schedule).
+            let o = m.occupancy.expect("occupancy of the voxel work list");
+            assert_eq!((o.resolution, o.voxels), (16, 4096), "{o:?}");
+            assert!(o.occupied > 0 && o.occupied < o.voxels && o.static_occupied <= o.occupied, "{o:?}");
+            assert!(o.bricks8 <= o.bricks4 && o.bricks4 <= o.occupied, "{o:?}");
+            if scenario == "static" {
+                assert_eq!(Some(o), typed.modes[0].occupancy, "{}", m.mode);
+            }
         }
+        assert!(out.contains("occupied voxels (work list):"), "{out}");
         if common::under_split_queues() {
             assert!(typed.device.queue_topology.contains("dedicated compute-only family"), "{:?}", typed.device);
         }

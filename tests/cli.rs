@@ -107,8 +107,19 @@ fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
     );
     let out = stdout(&o);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(out.contains("voxel clear -> voxelize static -> shadow maps"), "{out}");
+    assert!(out.contains("voxel clear -> voxelize static -> voxel list (static) -> shadow maps"), "{out}");
     assert!(out.contains("volume voxel albedo: 0.12 MiB") && out.contains("volume voxel normal: 0.12 MiB"), "{out}");
+    // The work list (bounded by the triangles' boxes, below 32^3 entries = 0.13 MiB) and what
+    // the first frame occupied: the box's walls and blocks, all static, a few percent of the grid.
+    let list = out.lines().find_map(|l| l.strip_prefix("  buffer voxel work lists: ")).expect(&out);
+    let mib: f64 = list.trim_end_matches(" MiB").parse().expect(list);
+    assert!(mib > 0.0 && mib < 0.125, "{list}");
+    let line = out.lines().find(|l| l.contains("occupied voxels (first frame):")).expect(&out);
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let occupied: u64 = words[4].parse().expect(line);
+    assert!(words[5..7] == ["of", "32³"] && (1000..8000).contains(&occupied), "{line}");
+    assert!(line.contains(&format!("{occupied} static")), "{line}");
+    assert!(out.contains("in 8³ bricks"), "{out}");
     for absent in
         ["voxel emission", "voxel static flags", "voxel clear dynamic", "voxelize dynamic", "gi specular", "gi shadow"]
     {
@@ -151,7 +162,7 @@ fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
         &[],
     );
     let out = stdout(&o);
-    assert!(out.contains("voxel clear dynamic -> voxelize dynamic"), "{out}");
+    assert!(out.contains("voxel clear dynamic -> voxelize dynamic -> voxel list (dynamic)"), "{out}");
     assert!(out.contains("volume voxel static flags"), "{out}");
 }
 
@@ -180,7 +191,9 @@ fn voxel_view_renders() {
     assert!(o.status.success(), "{}", stderr(&o));
     let out = stdout(&o);
     assert!(
-        out.contains("passes: frame data upload -> voxel clear -> voxelize static -> voxel view -> tonemap"),
+        out.contains(
+            "passes: frame data upload -> voxel clear -> voxelize static -> voxel list (static) -> voxel view -> tonemap"
+        ),
         "{out}"
     );
     let img = image::open(&png).unwrap().to_rgb8();

@@ -537,7 +537,13 @@ fn glossy_cornell_box_agrees_with_the_reference() {
 fn bounce_feedback_accumulates_over_updates_and_follows_motion() {
     let ctx = context();
     let scene = |extra: &[(&str, &str)]| {
-        let mut o = vec![("render.width", "32"), ("render.height", "32"), ("gi.voxel_resolution", "32")];
+        // Every voxel gathers in every update (no interleave): one bounce per update.
+        let mut o = vec![
+            ("render.width", "32"),
+            ("render.height", "32"),
+            ("gi.voxel_resolution", "32"),
+            ("gi.bounce_interleave", "1"),
+        ];
         o.push(("lights.0.motion", "{ velocity = [0, -0.25, 0] }"));
         o.extend_from_slice(extra);
         load(&repo().join("scenes/cornell-box.toml"), &o)

@@ -10,6 +10,8 @@
 #                          128^3 and 256^3 voxels, sync / async / async-lagged (JSON, timeline, table)
 #   serial-*.json/.txt     the serial profile (every pass submitted alone and host-timed)
 #   sweep-cornell/         a short speed/accuracy sweep against the path-traced reference
+#   curves/                per-pass cost against voxel resolution, pixels and triangles, with
+#                          fitted exponents (tools/cost-curves.py; curves.md is the table)
 #   steps.tsv, report.log  each step's exit status and seconds; README.md summarises
 #
 # Headless: no display, no window system. On a machine with only the NVIDIA driver (no Rust,
@@ -173,6 +175,17 @@ else
 fi
 step sweep-cornell 420 "$bin/dvsgi" sweep scenes/cornell-box.toml --out "$out/sweep-cornell" "${sweep[@]}" \
   >"$out/sweep-cornell.txt" 2>&1
+
+# ----- 6. Cost curves: per-pass cost against voxel resolution, pixels and triangles. -----
+if [ "$quick" = 1 ]; then
+  curves=(--resolutions 16,32 --sizes 32,64 --size 32 --resolution 16 --frames 1)
+else
+  curves=(--resolutions 32,64,128,256 --sizes 256,512,1024,2048 --size 512 --resolution 128 --frames 5)
+fi
+if command -v python3 >/dev/null; then
+  step cost-curves 300 python3 tools/cost-curves.py --bench "$bin/bench" --out "$out/curves" "${curves[@]}" \
+    --triangle-scenes scenes/cornell-box.toml,scenes/cornell-sphere.toml,scenes/sponza.toml >"$out/curves.txt" 2>&1
+fi
 
 # ----- Summary. -----
 {

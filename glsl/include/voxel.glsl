@@ -43,20 +43,22 @@ vec4 unpack_rgb_count(uint v) {
 }
 
 // Running average of `value` (components in [0,1]) into voxel `c` of the r32ui image IMG
-// by compare-and-swap; the count saturates at 255 samples.
+// by compare-and-swap; the count saturates at 255 samples. Returns true for the one
+// invocation that found the voxel empty (its first sample), which appends it to a work list.
 #define DEFINE_ATOMIC_AVERAGE(NAME, IMG)                                                    \
-    void NAME(ivec3 c, vec3 value) {                                                        \
+    bool NAME(ivec3 c, vec3 value) {                                                        \
         vec3 v255 = clamp(value, 0.0, 1.0) * 255.0;                                         \
         uint desired = pack_rgb_count(v255, 1.0);                                           \
         uint expected = 0u;                                                                 \
         for (int i = 0; i < 256; ++i) {                                                     \
             uint found = imageAtomicCompSwap(IMG, c, expected, desired);                    \
-            if (found == expected) break;                                                   \
+            if (found == expected) return i == 0;                                           \
             expected = found;                                                               \
             vec4 cur = unpack_rgb_count(found);                                             \
             if (cur.a >= 255.0) break;                                                      \
             desired = pack_rgb_count((cur.rgb * cur.a + v255) / (cur.a + 1.0), cur.a + 1.0); \
         }                                                                                   \
+        return false;                                                                       \
     }
 
 // Separating-axis test of a triangle (grid coordinates) against the axis-aligned box

@@ -294,6 +294,9 @@ fn print_table(ctx: &Context, r: &Report) {
             .unwrap_or("-".into())
     });
     row("submits per frame", &|m| format!("{:.1}", m.submits_per_frame));
+    if let Some(o) = r.modes.iter().find_map(|m| m.occupancy) {
+        outln!("occupied voxels (work list): {}", o.summary());
+    }
     row("host waits: in frame / slot reuse", &|m| format!("{} / {}", m.host_waits.in_frame, m.host_waits.slot_reuse));
     if ctx.info.is_cpu() {
         outln!(

@@ -149,7 +149,7 @@ enum Command {
         out: PathBuf,
         /// A knob and its values, e.g. --grid voxel_resolution=32,64,128 (repeatable; knobs:
         /// voxel_resolution, diffuse_cones, diffuse_cone_angle, step, bounces, downsample, ao
-        /// (0 or 1)).
+        /// (0 or 1), bounce_cones, bounce_interleave).
         /// Without --grid: the default grid of 216 configurations (ACCURACY.md).
         #[arg(long)]
         grid: Vec<String>,
@@ -671,18 +671,50 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
             ctx.info.device_local_heap as f64 / (1024.0 * 1024.0)
         );
         let before = ctx.allocated_bytes();
-        let renderer = Renderer::new(&ctx, scene)?;
+        let time = scene.settings.time;
+        let mut renderer = Renderer::new(&ctx, scene)?;
         outln!("  passes (first frame): {}", renderer.pass_names(false).join(" -> "));
         for img in renderer.images() {
             let kind = if img.desc.kind == dvsgi::gpu::ImageKind::D3 { "volume" } else { "image" };
             outln!("  {kind} {}: {:.2} MiB", img.name, img.bytes as f64 / (1024.0 * 1024.0));
         }
+        if let Some(list) = renderer.voxels().map(|v| v.list.bytes()) {
+            outln!("  buffer voxel work lists: {:.2} MiB", list as f64 / (1024.0 * 1024.0));
+        }
         outln!(
             "  GPU memory allocated for the scene and frame: {:.2} MiB",
             (ctx.allocated_bytes() - before) as f64 / (1024.0 * 1024.0)
         );
+        occupancy(&mut renderer, time)?;
     }
     check_validation(&ctx)?;
+    Ok(())
+}
+
+/// Voxelize (one frame at the scene time) and print what the grid holds: occupied voxels,
+/// occupied bricks, and what the full-resolution volumes would take in a bricked layout.
+fn occupancy(renderer: &mut Renderer, time: f32) -> dvsgi::Result<()> {
+    if renderer.voxels().is_none() {
+        return Ok(());
+    }
+    renderer.render(time, false)?;
+    let Some(list) = renderer.voxel_list()? else { return Ok(()) };
+    let o = list.occupancy();
+    outln!("  occupied voxels (first frame): {}", o.summary());
+    let v = renderer.voxels().expect("voxels");
+    let full: u64 = v.full_resolution().iter().map(|i| i.bytes).sum();
+    let per_voxel = full as f64 / o.voxels as f64;
+    let mib = |b: f64| b / (1024.0 * 1024.0);
+    for side in [4u32, 8] {
+        // Occupied bricks stored whole, plus a 4-byte page-table entry per brick of the grid.
+        let sparse = o.bricks(side) as f64 * f64::from(side).powi(3) * per_voxel + 4.0 * o.brick_slots(side) as f64;
+        outln!(
+            "  full-resolution volumes: {:.2} MiB dense; in {side}³ bricks {:.2} MiB ({:.1}%)",
+            mib(full as f64),
+            mib(sparse),
+            100.0 * sparse / full as f64
+        );
+    }
     Ok(())
 }
 

@@ -416,6 +416,11 @@ impl Pipeline {
         unsafe { self.ctx.device.cmd_dispatch(cmd, g(0), g(1), g(2)) };
     }
 
+    /// Dispatch with the group counts at `offset` in `args` (a `VkDispatchIndirectCommand`).
+    pub fn dispatch_indirect(&self, cmd: vk::CommandBuffer, args: &Buffer, offset: u64) {
+        unsafe { self.ctx.device.cmd_dispatch_indirect(cmd, args.raw, offset) };
+    }
+
     pub fn push<T: bytemuck::Pod>(&self, cmd: vk::CommandBuffer, data: &T) {
         unsafe {
             self.ctx.device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::ALL, 0, bytemuck::bytes_of(data))

@@ -31,6 +31,8 @@ pub enum Access {
     DepthAttachmentRead,
     TransferRead,
     HostRead,
+    /// Arguments of an indirect dispatch (or draw) read from a buffer.
+    IndirectCommandRead,
     // ----- writes -----
     ColorAttachmentWrite,
     DepthAttachmentWrite,
@@ -85,6 +87,7 @@ impl Access {
             ),
             Access::TransferRead => (S::COPY, A::TRANSFER_READ, L::TRANSFER_SRC_OPTIMAL, false),
             Access::HostRead => (S::HOST, A::HOST_READ, L::GENERAL, false),
+            Access::IndirectCommandRead => (S::DRAW_INDIRECT, A::INDIRECT_COMMAND_READ, L::UNDEFINED, false),
             Access::ColorAttachmentWrite => (
                 S::COLOR_ATTACHMENT_OUTPUT,
                 A::COLOR_ATTACHMENT_WRITE | A::COLOR_ATTACHMENT_READ,
@@ -292,6 +295,25 @@ mod tests {
     }
 
     #[test]
+    fn indirect_arguments_written_by_a_shader() {
+        // A work list's group counts written by a compute shader, then read as the arguments
+        // of an indirect dispatch and as a storage buffer by the dispatched shader.
+        let next = [Access::IndirectCommandRead, Access::ComputeShaderReadBuffer];
+        let b = barrier(&[Access::ComputeShaderWrite], &next, false, false).unwrap();
+        assert_eq!(b.src_stage, S::COMPUTE_SHADER);
+        assert_eq!(b.dst_stage, S::DRAW_INDIRECT | S::COMPUTE_SHADER);
+        assert!(b.dst_access.contains(A::INDIRECT_COMMAND_READ | A::SHADER_STORAGE_READ));
+        assert_eq!((b.old_layout, b.new_layout), (L::UNDEFINED, L::UNDEFINED));
+        // Rewriting them after the dispatch waits for the argument read (no memory to make
+        // visible: reads only).
+        let b = barrier(&next, &[Access::ComputeShaderWrite], false, false).unwrap();
+        assert_eq!(b.src_stage, S::DRAW_INDIRECT | S::COMPUTE_SHADER);
+        assert_eq!((b.src_access, b.dst_access), (A::NONE, A::NONE));
+        // Two indirect dispatches over the same arguments need nothing between them.
+        assert_eq!(barrier(&next, &next, false, false), None);
+    }
+
+    #[test]
     fn write_after_read_same_layout_is_execution_only() {
         let b = barrier(&[Access::ComputeShaderReadStorage], &[Access::ComputeShaderWrite], true, false).unwrap();
         assert_eq!(b.src_access, A::NONE);
@@ -383,6 +405,7 @@ mod tests {
             DepthAttachmentRead,
             TransferRead,
             HostRead,
+            IndirectCommandRead,
             ColorAttachmentWrite,
             DepthAttachmentWrite,
             ComputeShaderWrite,

@@ -5,7 +5,7 @@
 
 use crate::gpu::{Context, GpuError, GpuResult};
 use crate::render::frame::cone_shadows;
-use crate::render::voxel::VoxelNeeds;
+use crate::render::voxel::{list_capacity, VoxelGrid, VoxelNeeds};
 use crate::scene::{GiMode, Scene, View};
 
 /// What a device offers (`DeviceInfo`'s memory figures).
@@ -20,7 +20,8 @@ pub struct Limits<'a> {
 /// The large resources of a frame, by group, in bytes.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Estimate {
-    /// Voxel volumes (albedo, normal, emission, flags, radiance, bounces, directional mips).
+    /// Voxel volumes (albedo, normal, emission, flags, radiance, bounces, directional mips)
+    /// and the voxel work lists.
     pub volumes: u64,
     /// The largest single volume (one allocation).
     pub largest_volume: u64,
@@ -55,6 +56,13 @@ impl Estimate {
             }
             if needs.bounces > 0 {
                 vols.extend([8 * n, 8 * n]); // bounced radiance and the bounce's scratch volume
+            }
+            // The work list of occupied voxels (a 64-byte header and 4 bytes per voxel the
+            // triangles can occupy), and with dynamic objects the stale list.
+            let capacity = list_capacity(scene, &VoxelGrid::for_scene(scene));
+            vols.push(64 + 4 * capacity);
+            if needs.dynamic {
+                vols.push(4 * capacity.max(1));
             }
             if needs.cones {
                 // Six RGBA16F volumes at half resolution with full mip chains.
@@ -163,8 +171,9 @@ mod tests {
         scene.settings.gi.bounces = 1;
         let e = Estimate::of(&scene);
         // albedo + normal 2 x 2048, radiance 4096, bounced radiance and the bounce's scratch
-        // volume 2 x 4096, six directional chains of (64 + 8 + 1) texels x 8 bytes.
-        assert_eq!(e.volumes, 2 * 2048 + 4096 + 2 * 4096 + 6 * 73 * 8);
+        // volume 2 x 4096, six directional chains of (64 + 8 + 1) texels x 8 bytes, and the
+        // work list's 64-byte header (no triangles: no entries).
+        assert_eq!(e.volumes, 2 * 2048 + 4096 + 2 * 4096 + 6 * 73 * 8 + 64);
         assert_eq!(e.largest_volume, 4096);
         assert_eq!(e.targets, 100 * 48 + 100 * 8, "G-buffer, radiance, display, diffuse cones");
         scene.settings.gi.mode = GiMode::None;

@@ -9,9 +9,10 @@ use super::passes::readback::ReadbackPasses;
 use super::passes::shadow::ShadowPass;
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::upload::UploadPass;
-use super::passes::voxel_bounce::{BounceCopyPass, VoxelBouncePass};
+use super::passes::voxel_bounce::{BounceComposePass, VoxelBouncePass};
 use super::passes::voxel_clear::{DynamicClearPass, VoxelClearPass};
 use super::passes::voxel_light::VoxelLightPass;
+use super::passes::voxel_list::{ListKeeper, ListStep, VoxelListPass};
 use super::passes::voxel_mips::{VoxelMipPass, VoxelMips};
 use super::passes::voxel_view::{VoxelMipViewPass, VoxelViewPass};
 use super::passes::voxelize::{VoxelizePass, Voxelizer};
@@ -28,8 +29,10 @@ pub struct VoxelPasses {
     pub volumes: Arc<VoxelVolumes>,
     pub clear: VoxelClearPass,
     pub voxelize_static: VoxelizePass,
+    /// Closes the work list of occupied voxels after static voxelization.
+    pub list_static: VoxelListPass,
     /// Only with dynamic objects.
-    pub dynamic: Option<(DynamicClearPass, VoxelizePass)>,
+    pub dynamic: Option<DynamicPasses>,
     pub light: VoxelLightPass,
     /// Directional mips of the direct radiance; only when cones are traced.
     pub mips: Option<VoxelMipPass>,
@@ -37,15 +40,23 @@ pub struct VoxelPasses {
     pub bounces: Option<BouncePasses>,
 }
 
-/// The passes of a bounce step: a bounce into the scratch volume, its copy into the bounced
-/// radiance and the directional mips of that.
+/// Revoxelizing the dynamic objects: empty their voxels (the list's dynamic range), voxelize
+/// them again, close the list.
+pub struct DynamicPasses {
+    pub clear: DynamicClearPass,
+    pub voxelize: VoxelizePass,
+    pub list: VoxelListPass,
+}
+
+/// The passes of a bounce step: a bounce gathering indirect light into the scratch volume, the
+/// bounced radiance composed from it and the direct light, and the directional mips of that.
 pub struct BouncePasses {
     /// Gathers the direct light: the first bounce of an update that starts afresh.
     pub from_direct: VoxelBouncePass,
     /// Gathers the bounced radiance: every later bounce, and with `gi.bounce_feedback` the
     /// first bounce of every update after the first, so bounces accumulate over updates.
     pub from_bounced: VoxelBouncePass,
-    pub copy: BounceCopyPass,
+    pub compose: BounceComposePass,
     pub mips: VoxelMipPass,
 }
 
@@ -145,8 +156,13 @@ impl FramePasses {
         let voxels = if s.gi.mode == GiMode::Vct || voxel_view {
             let volumes = Arc::new(VoxelVolumes::new(ctx, scene)?);
             let voxelizer = Voxelizer::new(ctx, scene_gpu, frame, &volumes)?;
+            let keeper = ListKeeper::new(ctx, &volumes)?;
             let dynamic = if volumes.needs.dynamic {
-                Some((DynamicClearPass::new(ctx, &volumes)?, VoxelizePass::new(&voxelizer, true)))
+                Some(DynamicPasses {
+                    clear: DynamicClearPass::new(ctx, &volumes, &keeper)?,
+                    voxelize: VoxelizePass::new(&voxelizer, true),
+                    list: VoxelListPass::new(&keeper, ListStep::Dynamic),
+                })
             } else {
                 None
             };
@@ -155,9 +171,9 @@ impl FramePasses {
                 let bounces = if volumes.needs.bounces > 0 {
                     let bounced = &volumes.bounced[0];
                     Some(BouncePasses {
-                        from_direct: VoxelBouncePass::new(ctx, &volumes, &volumes.radiance)?,
-                        from_bounced: VoxelBouncePass::new(ctx, &volumes, bounced)?,
-                        copy: BounceCopyPass::new(&volumes),
+                        from_direct: VoxelBouncePass::new(ctx, frame, &volumes, &volumes.radiance)?,
+                        from_bounced: VoxelBouncePass::new(ctx, frame, &volumes, bounced)?,
+                        compose: BounceComposePass::new(ctx, &volumes)?,
                         mips: VoxelMipPass::new(ctx, &shared, &volumes, bounced)?,
                     })
                 } else {
@@ -171,6 +187,7 @@ impl FramePasses {
                 light: VoxelLightPass::new(ctx, frame, &volumes, &atlas, &s.gi)?,
                 clear: VoxelClearPass::new(&volumes),
                 voxelize_static: VoxelizePass::new(&voxelizer, false),
+                list_static: VoxelListPass::new(&keeper, ListStep::Static),
                 dynamic,
                 mips,
                 bounces,
@@ -299,10 +316,12 @@ impl FramePasses {
             if !state.static_voxelized {
                 passes.push(&v.clear);
                 passes.push(&v.voxelize_static);
+                passes.push(&v.list_static);
             }
-            if let (true, Some((clear, voxelize))) = (state.revoxelize || !state.static_voxelized, &v.dynamic) {
-                passes.push(clear);
-                passes.push(voxelize);
+            if let (true, Some(d)) = (state.revoxelize || !state.static_voxelized, &v.dynamic) {
+                passes.push(&d.clear);
+                passes.push(&d.voxelize);
+                passes.push(&d.list);
             }
         }
         let lit_voxels = match &self.shading {
@@ -329,7 +348,7 @@ impl FramePasses {
             if let Some(b) = &v.bounces {
                 for i in 0..state.bounces {
                     voxel_lighting.push(if i == 0 && !feed_back { &b.from_direct } else { &b.from_bounced });
-                    voxel_lighting.push(&b.copy);
+                    voxel_lighting.push(&b.compose);
                     voxel_lighting.push(&b.mips);
                 }
             }

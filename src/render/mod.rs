@@ -17,7 +17,7 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use frame::{FramePasses, FrameState};
 use gpu_allocator::MemoryLocation;
-use graph::Use;
+use graph::{Pass, Use};
 use scene_gpu::SceneGpu;
 pub use schedule::{FrameTiming, HostWaits, Mode, PassTime, Scheduler, SerialTime, SubmitRecord};
 use std::sync::Arc;
@@ -36,6 +36,9 @@ pub struct FrameUniforms {
     pub shadow: [f32; 4],
     /// x: 16-bit radiance targets hold radiance * x (`lights::radiance_scale`); y = 1/x.
     pub radiance_scale: [f32; 4],
+    /// x: voxel updates before this frame's; y: this update's bounce interleave (1: the
+    /// bounce gathers for every voxel; see `gi.bounce_interleave`).
+    pub voxel: [u32; 4],
 }
 
 /// Per-frame data from the host, shared by the passes. The buffers are device-local and
@@ -123,6 +126,10 @@ pub struct Renderer {
     last_passes: Vec<String>,
     /// `lights::radiance_scale` of the scene.
     radiance_scale: f32,
+    /// The frame uniforms being written (uploaded once the frame's state is known).
+    uniforms: FrameUniforms,
+    /// Voxel updates (relights) so far: the bounce's interleave phase.
+    voxel_updates: u64,
 }
 
 impl Renderer {
@@ -198,6 +205,8 @@ impl Renderer {
             lights_changed: true,
             last_passes: Vec::new(),
             radiance_scale,
+            uniforms: FrameUniforms::zeroed(),
+            voxel_updates: 0,
         })
     }
 
@@ -275,6 +284,37 @@ impl Renderer {
         Ok(copy.bytes().to_vec())
     }
 
+    /// Read the work list of occupied voxels back (waits; after a frame, never inside one).
+    pub fn voxel_list(&mut self) -> GpuResult<Option<voxel::ListSnapshot>> {
+        let Some(v) = self.passes.voxels.as_ref().map(|v| v.volumes.clone()) else { return Ok(None) };
+        let ctx = self.ctx.clone();
+        let list = &v.list;
+        let header = passes::voxel_list::BufferDownload::new(&ctx, &list.buffer, 0, voxel::list_header::SIZE)?;
+        self.scheduler.begin(None)?;
+        self.scheduler.record(&[&header, &passes::readback::HostReadPass { buffers: vec![header.buffer.clone()] }])?;
+        self.scheduler.end(true)?;
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(header.bytes());
+        let count = u64::from(words[3]).min(list.capacity);
+        let stale_count = u64::from(words[11]).min(list.capacity);
+        // The entries in use (and the stale ones), then decode all together.
+        let entries =
+            passes::voxel_list::BufferDownload::new(&ctx, &list.buffer, 0, voxel::list_header::SIZE + count * 4)?;
+        let mut downloads = vec![&entries];
+        let stale = match &list.stale {
+            Some(s) => Some(passes::voxel_list::BufferDownload::new(&ctx, s, 0, stale_count * 4)?),
+            None => None,
+        };
+        downloads.extend(stale.as_ref());
+        let host = passes::readback::HostReadPass { buffers: downloads.iter().map(|d| d.buffer.clone()).collect() };
+        let mut passes: Vec<&dyn Pass> = downloads.iter().map(|d| *d as &dyn Pass).collect();
+        passes.push(&host);
+        self.scheduler.begin(None)?;
+        self.scheduler.record(&passes)?;
+        self.scheduler.end(true)?;
+        let stale_bytes = stale.as_ref().map(|s| s.bytes().to_vec()).unwrap_or_default();
+        Ok(Some(voxel::ListSnapshot::decode(v.grid.resolution, entries.bytes(), &stale_bytes)))
+    }
+
     /// The schedule mode of the next frames.
     pub fn mode(&self) -> Mode {
         self.scheduler.mode()
@@ -319,7 +359,7 @@ impl Renderer {
             ToneMap::Reinhard => 1,
             ToneMap::Clamp => 2,
         };
-        let u = FrameUniforms {
+        self.uniforms = FrameUniforms {
             view: view.to_cols_array_2d(),
             proj: proj.to_cols_array_2d(),
             view_proj: view_proj.to_cols_array_2d(),
@@ -328,9 +368,9 @@ impl Renderer {
             counts: [self.width, self.height, self.scene.lights.len() as u32, tonemap],
             shadow: [s.shadow_filter_radius, s.shadow_normal_bias, s.shadow_map_size as f32, 2f32.powf(s.exposure)],
             radiance_scale: [self.radiance_scale, 1.0 / self.radiance_scale, 0.0, 0.0],
+            voxel: [0; 4],
         };
         let upload = &self.passes.upload;
-        upload.set(0, bytemuck::bytes_of(&u));
         let bounds = self.scene.world_bounds(t);
         let (lights, views) = lights::build(&self.scene, t, bounds, s.shadow_map_size, s.shadow_filter_radius);
         let bytes: &[u8] = bytemuck::cast_slice(&lights);
@@ -355,6 +395,14 @@ impl Renderer {
         self.scheduler.begin(Some(frame))?;
         self.update(t);
         let state = self.frame_state(readback);
+        // The update counter and interleave of the bounce (uniforms written last: whether the
+        // voxels relight depends on the lights just written).
+        let interleave = if state.feed_back { self.scene.settings.gi.bounce_interleave } else { 1 };
+        self.uniforms.voxel = [self.voxel_updates as u32, interleave, 0, 0];
+        self.passes.upload.set(0, bytemuck::bytes_of(&self.uniforms));
+        if state.relight {
+            self.voxel_updates += 1;
+        }
         let list = self.passes.list(state);
         self.last_passes = list.iter().map(|p| p.name().to_string()).collect();
         self.scheduler.record(&list)?;

@@ -5,7 +5,7 @@
 use crate::gpu::{Access, Bind, Buffer, Context, GpuError, GpuResult, Image, ImageDesc, Sampler};
 use crate::render::cones::GpuGiParams;
 use crate::render::graph::Use;
-use crate::scene::{Aabb, GiMode, Scene, View};
+use crate::scene::{Aabb, GiMode, GiSettings, Scene, View};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -104,6 +104,8 @@ pub struct VoxelVolumes {
     pub directional: Vec<Arc<Image>>,
     /// Cone-tracing parameters (`GiParams` in cone_params.glsl).
     pub gi_params: Buffer,
+    /// The same for the bounce's cones (`gi.bounce_cones`).
+    pub bounce_params: Buffer,
     /// Trilinear, mipmapped, transparent black outside the grid.
     pub sampler: Sampler,
     /// Bound in place of `flags` when there is none (a 1-voxel volume).
@@ -115,6 +117,116 @@ pub struct VoxelVolumes {
     pub radiance_scale: f32,
     /// `gi.diffuse_rays`: the per-pixel tracer gathers with rays instead of cones (> 0).
     pub diffuse_rays: u32,
+    /// The work list of occupied voxels the voxel passes dispatch over.
+    pub list: VoxelList,
+}
+
+/// Byte offsets of the list header (`VoxelListBlock` in glsl/include/voxel_list.glsl): each
+/// range is a `VkDispatchIndirectCommand` followed by its entry count.
+pub mod list_header {
+    /// Every occupied voxel: the voxel light and bounce.
+    pub const OCCUPIED: u64 = 0;
+    /// The dynamic voxels of the last revoxelization: the dynamic clear.
+    pub const DYNAMIC: u64 = 16;
+    /// The voxels the last dynamic clear emptied: zeroed in the radiance volumes on relight.
+    pub const STALE: u64 = 32;
+    pub const STATIC_COUNT: u64 = 48;
+    pub const DROPPED: u64 = 52;
+    /// Header size; the entries (one packed voxel per u32) follow.
+    pub const SIZE: u64 = 64;
+}
+
+/// The work list: every occupied voxel once (static voxels first), appended by voxelization,
+/// with the indirect dispatch arguments of its ranges; and, with dynamic objects, the stale
+/// list of voxels the last dynamic clear emptied.
+pub struct VoxelList {
+    pub buffer: Arc<Buffer>,
+    /// Only with dynamic objects.
+    pub stale: Option<Arc<Buffer>>,
+    /// Entries the list holds ([`list_capacity`]), so no voxelization can overflow it.
+    pub capacity: u64,
+}
+
+/// Voxels the scene's triangles can occupy, at most: what the work list must hold. Per
+/// triangle, the voxels its bounding box touches (conservatively: a box touching a voxel's
+/// face counts); for an object with motion, of any box its triangle can have once rotated
+/// and scaled by up to the motion's largest scale (a cube as wide as the triangle's enclosing
+/// sphere, 2/sqrt(3) of its longest edge). Capped at N^3: the list follows the surfaces, not
+/// the grid, and no voxelization can overflow it.
+pub fn list_capacity(scene: &Scene, grid: &VoxelGrid) -> u64 {
+    let n = u64::from(grid.resolution);
+    let vs = grid.voxel_size.max(f32::MIN_POSITIVE);
+    // Voxels along one axis touched by the span [lo, hi] (voxel units), inside the grid.
+    let span = |lo: f32, hi: f32| -> u64 {
+        let (lo, hi) = (lo.max(0.0) - 0.01, hi.min(n as f32) + 0.01);
+        if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
+            return 0;
+        }
+        ((hi.floor() - lo.ceil()) as i64 + 2).clamp(0, n as i64) as u64
+    };
+    let mut total = 0u64;
+    for o in &scene.objects {
+        let moves = !o.motion.is_static();
+        let m = o.model_matrix(scene.settings.time);
+        let scale = object_max_scale(o);
+        for mesh in o.meshes.iter().filter_map(|&i| scene.meshes.get(i as usize)) {
+            for t in mesh.indices.chunks_exact(3) {
+                let p = [t[0], t[1], t[2]].map(|i| mesh.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO));
+                let count = if moves {
+                    let edge = (p[0] - p[1]).length().max((p[1] - p[2]).length()).max((p[2] - p[0]).length());
+                    let side = (edge * scale * 2.0 / 3f32.sqrt() / vs).min(n as f32);
+                    let axis = ((side + 0.02).floor() as u64 + 2).min(n);
+                    axis.pow(3)
+                } else {
+                    let w = p.map(|q| (m.transform_point3(q) - grid.origin) / vs);
+                    let (lo, hi) = (w[0].min(w[1]).min(w[2]), w[0].max(w[1]).max(w[2]));
+                    span(lo.x, hi.x) * span(lo.y, hi.y) * span(lo.z, hi.z)
+                };
+                total = total.saturating_add(count);
+                if total >= n.pow(3) {
+                    return n.pow(3);
+                }
+            }
+        }
+    }
+    total
+}
+
+/// The largest factor by which an object's model matrix can stretch a length at any time
+/// (its static transform's, times the largest keyframe scale).
+fn object_max_scale(o: &crate::scene::Object) -> f32 {
+    let c = [o.transform.x_axis.truncate(), o.transform.y_axis.truncate(), o.transform.z_axis.truncate()];
+    let len = c.map(|v| v.length());
+    // Translate-rotate-scale (what scene files build) has orthogonal columns: the largest
+    // stretch is the longest column. Otherwise the Frobenius norm bounds it.
+    let tol = 1e-4 * len[0].max(len[1]).max(len[2]).powi(2);
+    let orthogonal = c[0].dot(c[1]).abs() <= tol && c[1].dot(c[2]).abs() <= tol && c[0].dot(c[2]).abs() <= tol;
+    let fixed = if orthogonal { len[0].max(len[1]).max(len[2]) } else { len.map(|l| l * l).iter().sum::<f32>().sqrt() };
+    let motion = match &o.motion {
+        crate::scene::Motion::Keyframes(k) => k.iter().map(|k| k.scale.abs().max_element()).fold(1.0f32, f32::max),
+        _ => 1.0,
+    };
+    fixed * motion
+}
+
+impl VoxelList {
+    fn new(ctx: &Arc<Context>, capacity: u64, dynamic: bool) -> GpuResult<VoxelList> {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::INDIRECT_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let gpu = gpu_allocator::MemoryLocation::GpuOnly;
+        let buffer = Arc::new(Buffer::new(ctx, "voxel list", list_header::SIZE + capacity * 4, usage, gpu)?);
+        let stale = dynamic
+            .then(|| Buffer::new(ctx, "voxel stale list", capacity * 4, usage, gpu).map(Arc::new))
+            .transpose()?;
+        Ok(VoxelList { buffer, stale, capacity })
+    }
+
+    /// Bytes of GPU memory the lists take.
+    pub fn bytes(&self) -> u64 {
+        self.buffer.size + self.stale.as_ref().map_or(0, |s| s.size)
+    }
 }
 
 impl VoxelVolumes {
@@ -161,6 +273,11 @@ impl VoxelVolumes {
         let mut gi = scene.settings.gi.clone();
         gi.ao |= scene.settings.view == View::Ao;
         let gi_params = Buffer::uniform(ctx, "gi params", &GpuGiParams::new(&gi, res, grid.voxel_size, mip_levels))?;
+        // The bounce's cone set (`gi.bounce_cones`, 0: the per-pixel set).
+        let bounce_cones = if gi.bounce_cones == 0 { gi.diffuse_cones } else { gi.bounce_cones };
+        let bounce_gi = GiSettings { diffuse_cones: bounce_cones, ..gi.clone() };
+        let bounce_params =
+            Buffer::uniform(ctx, "bounce gi params", &GpuGiParams::new(&bounce_gi, res, grid.voxel_size, mip_levels))?;
         let addr = vk::SamplerAddressMode::CLAMP_TO_BORDER;
         let sampler = Sampler::new(
             ctx,
@@ -196,6 +313,7 @@ impl VoxelVolumes {
             bounced,
             directional,
             gi_params,
+            bounce_params,
             sampler,
             normal: volume("voxel normal", vk::Format::R32_UINT)?,
             emission: needs.emission.then(|| volume("voxel emission", vk::Format::R32_UINT)).transpose()?,
@@ -209,6 +327,7 @@ impl VoxelVolumes {
             emission_scale,
             radiance_scale,
             diffuse_rays: scene.settings.gi.diffuse_rays,
+            list: VoxelList::new(ctx, list_capacity(scene, &grid), needs.dynamic)?,
         })
     }
 
@@ -220,6 +339,16 @@ impl VoxelVolumes {
         v.push(&self.radiance);
         v.extend(self.bounced.iter());
         v.extend(self.directional.iter());
+        v
+    }
+
+    /// The volumes at full resolution (one texel per voxel): what a sparse layout would brick.
+    pub fn full_resolution(&self) -> Vec<&Arc<Image>> {
+        let mut v = vec![&self.albedo, &self.normal];
+        v.extend(self.emission.as_ref());
+        v.extend(self.flags.as_ref());
+        v.push(&self.radiance);
+        v.extend(self.bounced.iter());
         v
     }
 
@@ -260,5 +389,130 @@ impl VoxelVolumes {
 
     pub fn flags_or_placeholder(&self) -> &Arc<Image> {
         self.flags.as_ref().or(self.flags_placeholder.as_ref()).expect("flags or placeholder")
+    }
+}
+
+/// The work list as read back after a frame (`Renderer::voxel_list`): for tests, `info` and
+/// the benchmark's occupancy report. Never read inside a frame.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ListSnapshot {
+    pub resolution: u32,
+    /// Group counts of the indirect dispatch over every occupied voxel.
+    pub occupied_groups: [u32; 3],
+    /// Occupied voxels, static ones first: `entries[..static_count]`.
+    pub entries: Vec<[u32; 3]>,
+    pub static_count: u32,
+    /// Group counts of the dynamic clear's dispatch (over `entries[static_count..]`).
+    pub dynamic_groups: [u32; 3],
+    /// Voxels the last dynamic clear emptied.
+    pub stale: Vec<[u32; 3]>,
+    pub stale_groups: [u32; 3],
+    /// Appends that did not fit (0: the capacity is N^3).
+    pub dropped: u32,
+}
+
+impl ListSnapshot {
+    /// Decode the list header and entries (`header_and_entries`) and the stale entries.
+    pub fn decode(resolution: u32, bytes: &[u8], stale_bytes: &[u8]) -> ListSnapshot {
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(bytes);
+        let range = |offset: u64| {
+            let i = offset as usize / 4;
+            ([words[i], words[i + 1], words[i + 2]], words[i + 3])
+        };
+        let (occupied_groups, count) = range(list_header::OCCUPIED);
+        let (dynamic_groups, _) = range(list_header::DYNAMIC);
+        let (stale_groups, stale_count) = range(list_header::STALE);
+        let unpack = |w: &u32| [w & 0x3ff, (w >> 10) & 0x3ff, (w >> 20) & 0x3ff];
+        let first = list_header::SIZE as usize / 4;
+        let entries = words[first..].iter().take(count as usize).map(unpack).collect();
+        let stale_words: Vec<u32> = bytemuck::pod_collect_to_vec(stale_bytes);
+        ListSnapshot {
+            resolution,
+            occupied_groups,
+            entries,
+            static_count: words[list_header::STATIC_COUNT as usize / 4],
+            dynamic_groups,
+            stale: stale_words.iter().take(stale_count as usize).map(unpack).collect(),
+            stale_groups,
+            dropped: words[list_header::DROPPED as usize / 4],
+        }
+    }
+
+    /// How much of the grid is occupied, and what a bricked layout would hold.
+    pub fn occupancy(&self) -> Occupancy {
+        let n = u64::from(self.resolution);
+        let bricks = |side: u32| {
+            let mut set: Vec<u64> = self
+                .entries
+                .iter()
+                .map(|c| {
+                    let b = c.map(|v| u64::from(v / side));
+                    b[0] + n * (b[1] + n * b[2])
+                })
+                .collect();
+            set.sort_unstable();
+            set.dedup();
+            set.len() as u64
+        };
+        Occupancy {
+            resolution: self.resolution,
+            voxels: n.pow(3),
+            occupied: self.entries.len() as u64,
+            static_occupied: u64::from(self.static_count),
+            bricks4: bricks(4),
+            bricks8: bricks(8),
+        }
+    }
+}
+
+/// Occupied voxels of the grid (after voxelization) and the bricks of 4^3 and 8^3 voxels that
+/// hold any: what a sparse layout would have to store.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Occupancy {
+    pub resolution: u32,
+    /// N^3.
+    pub voxels: u64,
+    pub occupied: u64,
+    /// Of which static.
+    pub static_occupied: u64,
+    pub bricks4: u64,
+    pub bricks8: u64,
+}
+
+impl Occupancy {
+    pub fn fraction(&self) -> f64 {
+        self.occupied as f64 / self.voxels.max(1) as f64
+    }
+
+    /// Bricks of `side`^3 voxels in the grid.
+    pub fn brick_slots(&self, side: u32) -> u64 {
+        u64::from(self.resolution.div_ceil(side)).pow(3)
+    }
+
+    /// Occupied bricks of `side`^3 (4 or 8).
+    pub fn bricks(&self, side: u32) -> u64 {
+        if side == 4 {
+            self.bricks4
+        } else {
+            self.bricks8
+        }
+    }
+
+    /// One line: occupied voxels and bricks, with their shares of the grid.
+    pub fn summary(&self) -> String {
+        let pct = |a: u64, b: u64| 100.0 * a as f64 / b.max(1) as f64;
+        let bricks = |side: u32| {
+            let (b, slots) = (self.bricks(side), self.brick_slots(side));
+            format!("{b} of {side}³ ({:.2}%)", pct(b, slots))
+        };
+        format!(
+            "{} of {}³ ({:.3}%), {} static; bricks {}, {}",
+            self.occupied,
+            self.resolution,
+            100.0 * self.fraction(),
+            self.static_occupied,
+            bricks(4),
+            bricks(8)
+        )
     }
 }

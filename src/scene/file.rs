@@ -305,6 +305,8 @@ pub(crate) const GI_KEYS: &[&str] = &[
     "bounce_feedback",
     "first_update_bounces",
     "diffuse_cones",
+    "bounce_cones",
+    "bounce_interleave",
     "diffuse_rays",
     "diffuse_cone_angle",
     "specular",

@@ -15,16 +15,17 @@ pub enum Preset {
 impl Preset {
     /// The `[gi]` overrides, as (dotted key, TOML value).
     pub fn overrides(self) -> Vec<(String, String)> {
-        // (voxels, cones, bounces, downsample): points of the FLIP fronts of the Cornell box
-        // and Sponza on lavapipe (ACCURACY.md); `ultra` is the scene-file default. Step 0.5,
-        // automatic apertures, AO off everywhere.
+        // (voxels, cones, bounces, downsample): points on the FLIP fronts of both the Cornell
+        // box and Sponza on lavapipe after issue 16 (ACCURACY.md); `ultra` is the scene-file
+        // default (on Sponza's front). Step 0.5, automatic apertures, AO off, and the bounce
+        // gathered by one in 4 static voxels per update everywhere.
         let (voxels, cones, bounces, downsample) = match self {
-            Preset::Low => ("32", "9", "0", "2"),
-            Preset::Medium => ("32", "9", "1", "2"),
-            Preset::High => ("64", "9", "1", "2"),
+            Preset::Low => ("32", "4", "1", "2"),
+            Preset::Medium => ("64", "9", "1", "2"),
+            Preset::High => ("128", "9", "1", "2"),
             Preset::Ultra => ("128", "9", "1", "1"),
         };
-        let values: [(&str, &str); 7] = [
+        let values: [(&str, &str); 8] = [
             ("voxel_resolution", voxels),
             ("diffuse_cones", cones),
             ("diffuse_cone_angle", "0"),
@@ -32,6 +33,7 @@ impl Preset {
             ("bounces", bounces),
             ("downsample", downsample),
             ("ao", "false"),
+            ("bounce_interleave", "4"),
         ];
         let mut out = vec![("gi.mode".to_string(), "\"vct\"".to_string())];
         out.extend(values.iter().map(|(k, v)| (format!("gi.{k}"), v.to_string())));
@@ -59,6 +61,7 @@ mod tests {
             // Each level costs more: more bounces, or as many on more voxels or with more cones
             // or at full resolution.
             let cost = (gi.bounces, gi.voxel_resolution, gi.diffuse_cones, 8 - gi.downsample);
+            assert_eq!(gi.bounce_interleave, crate::scene::GiSettings::default().bounce_interleave);
             assert!(cost > last, "{p:?}");
             last = cost;
             if *p == Preset::Ultra {
@@ -68,6 +71,7 @@ mod tests {
                     (d.voxel_resolution, d.diffuse_cones, d.bounces, d.downsample, d.step, d.ao),
                     "ultra is the scene-file default"
                 );
+                assert_eq!(gi.bounce_interleave, d.bounce_interleave);
             }
         }
     }

@@ -389,8 +389,18 @@ pub struct GiSettings {
     /// With feedback, the bounces of the first update (when there is nothing to feed back),
     /// so that a single frame is already converged; at least `bounces`.
     pub first_update_bounces: u32,
-    /// Diffuse cones per pixel (and per voxel in bounces): one of [`DIFFUSE_CONE_COUNTS`].
+    /// Diffuse cones per pixel (and per voxel in bounces, unless `bounce_cones` says
+    /// otherwise): one of [`DIFFUSE_CONE_COUNTS`].
     pub diffuse_cones: u32,
+    /// Diffuse cones per voxel in the bounces: one of [`DIFFUSE_CONE_COUNTS`], or 0 for
+    /// `diffuse_cones`.
+    pub bounce_cones: u32,
+    /// With `bounce_feedback`, each update after the first gathers the bounce for one in
+    /// this many static voxels (by workgroups of the work list), in turn (dynamic voxels every
+    /// update), so a bounce costs 1/N of a full one and every voxel's gathered light is at
+    /// most N updates old; 1 = all. A static scene converges to the same light; light that
+    /// moves takes about N times as many updates to settle (ACCURACY.md).
+    pub bounce_interleave: u32,
     /// Diagnostic: gather each pixel's diffuse light with this many cosine-distributed rays
     /// through the full-resolution voxels (exact for the voxelized scene, noisy) instead of
     /// the diffuse cones; 0 = cones. Separates the voxels' error from the cones'.
@@ -436,6 +446,8 @@ impl Default for GiSettings {
             bounce_feedback: true,
             first_update_bounces: 4,
             diffuse_cones: 9,
+            bounce_cones: 0,
+            bounce_interleave: 4,
             diffuse_rays: 0,
             diffuse_cone_angle: 0.0,
             specular: true,
@@ -484,6 +496,13 @@ impl GiSettings {
         }
         if self.diffuse_rays > 64 {
             return Err(("diffuse_rays", format!("{} is not in 0..=64", self.diffuse_rays)));
+        }
+        if self.bounce_cones != 0 && !DIFFUSE_CONE_COUNTS.contains(&self.bounce_cones) {
+            let m = format!("{} is not 0 (as diffuse_cones) or one of {DIFFUSE_CONE_COUNTS:?}", self.bounce_cones);
+            return Err(("bounce_cones", m));
+        }
+        if !(1..=16).contains(&self.bounce_interleave) {
+            return Err(("bounce_interleave", format!("{} is not in 1..=16", self.bounce_interleave)));
         }
         if !DIFFUSE_CONE_COUNTS.contains(&self.diffuse_cones) {
             return Err(("diffuse_cones", format!("{} is not one of {DIFFUSE_CONE_COUNTS:?}", self.diffuse_cones)));

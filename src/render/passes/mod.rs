@@ -10,6 +10,7 @@ pub mod upload;
 pub mod voxel_bounce;
 pub mod voxel_clear;
 pub mod voxel_light;
+pub mod voxel_list;
 pub mod voxel_mips;
 pub mod voxel_view;
 pub mod voxelize;

@@ -1,15 +1,19 @@
-//! One light bounce in the voxels (compute): diffuse cones from every occupied voxel through
-//! a radiance volume and its directional mips, added to the direct radiance and written to the
-//! scratch volume; then a copy of the scratch volume into the bounced radiance (transfer).
+//! One light bounce in the voxels (compute): diffuse cones from the occupied voxels (the work
+//! list's entries, one in `gi.bounce_interleave` static voxels per feedback update) through a
+//! radiance volume and its directional mips, the reflected light written to the scratch
+//! volume; then the bounced radiance: direct plus that indirect light, per occupied voxel.
 
+use super::voxel_list::{dispatch_list, list_reads, StaleZero};
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline};
 use crate::render::graph::{Pass, QueueKind, Use};
-use crate::render::voxel::VoxelVolumes;
+use crate::render::voxel::{list_header, VoxelVolumes};
+use crate::render::FrameBuffers;
 use ash::vk;
 use std::sync::Arc;
 
 pub struct VoxelBouncePass {
     name: String,
+    frame: FrameBuffers,
     volumes: Arc<VoxelVolumes>,
     source: Arc<Image>,
     target: Arc<Image>,
@@ -19,8 +23,13 @@ pub struct VoxelBouncePass {
 
 impl VoxelBouncePass {
     /// The bounce that samples `source` (and the directional volumes built from it) and writes
-    /// the scratch volume.
-    pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>, source: &Arc<Image>) -> GpuResult<Self> {
+    /// the indirect light into the scratch volume.
+    pub fn new(
+        ctx: &Arc<Context>,
+        frame: &FrameBuffers,
+        volumes: &Arc<VoxelVolumes>,
+        source: &Arc<Image>,
+    ) -> GpuResult<Self> {
         let target = &volumes.bounced[1];
         let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let v = volumes;
@@ -31,18 +40,20 @@ impl VoxelBouncePass {
             vk::ShaderStageFlags::COMPUTE,
             &[
                 Bind::Uniform(&v.grid_buffer),
-                Bind::Uniform(&v.gi_params),
+                Bind::Uniform(&v.bounce_params),
                 Bind::Sampled(source.view, v.sampler.raw, ro),
                 Bind::SampledArray(v.directional.iter().map(|d| d.view).collect(), v.sampler.raw, ro),
                 Bind::StorageImage(v.albedo.view),
                 Bind::StorageImage(v.normal.view),
-                Bind::Sampled(v.radiance.view, v.sampler.raw, ro),
+                Bind::Uniform(&frame.uniforms),
                 Bind::StorageImage(target.view),
+                Bind::Storage(&v.list.buffer),
             ],
         )?;
         let pipeline = Pipeline::compute(ctx, "voxel bounce", shaders::VOXEL_BOUNCE_COMP, &[set.layout], 0, &[])?;
         Ok(VoxelBouncePass {
             name,
+            frame: frame.clone(),
             volumes: volumes.clone(),
             source: source.clone(),
             target: target.clone(),
@@ -60,65 +71,82 @@ impl Pass for VoxelBouncePass {
         let v = &self.volumes;
         let mut uses = vec![
             Use::image(&self.source, Access::ComputeShaderReadSampled),
-            Use::image(&v.radiance, Access::ComputeShaderReadSampled),
             Use::image(&v.albedo, Access::ComputeShaderReadStorage),
             Use::image(&v.normal, Access::ComputeShaderReadStorage),
-            Use::overwrite(&self.target, Access::ComputeShaderWrite),
+            // Voxels that do not gather this update keep their last indirect light.
+            Use::image(&self.target, Access::ComputeShaderWrite),
+            Use::buffer(&self.frame.uniforms, Access::ComputeShaderReadBuffer),
         ];
         uses.extend(v.directional.iter().map(|d| Use::image(d, Access::ComputeShaderReadSampled)));
+        uses.extend(list_reads(v));
         uses
     }
     fn queue(&self) -> QueueKind {
         QueueKind::Compute
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        let n = self.volumes.grid.resolution;
         self.pipeline.bind(cmd, &[self.set.set]);
-        self.pipeline.dispatch(cmd, [n; 3], [4; 3]);
+        dispatch_list(&self.pipeline, cmd, &self.volumes, list_header::OCCUPIED);
     }
 }
 
-/// Copies the bounce's scratch volume into the bounced radiance, which the next bounce, the
-/// directional mips and the cones read.
-pub struct BounceCopyPass {
-    scratch: Arc<Image>,
-    bounced: Arc<Image>,
+/// The bounced radiance of every occupied voxel: its direct radiance plus the indirect light
+/// in the scratch volume (stale voxels zeroed). The next bounce, the directional mips and the
+/// cones read it.
+pub struct BounceComposePass {
+    volumes: Arc<VoxelVolumes>,
+    pipeline: Pipeline,
+    set: DescriptorSet,
+    stale: Option<StaleZero>,
 }
 
-impl BounceCopyPass {
-    pub fn new(volumes: &VoxelVolumes) -> Self {
-        BounceCopyPass { bounced: volumes.bounced[0].clone(), scratch: volumes.bounced[1].clone() }
+impl BounceComposePass {
+    pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>) -> GpuResult<Self> {
+        let v = volumes;
+        let set = DescriptorSet::new(
+            ctx,
+            "voxel bounce compose",
+            vk::ShaderStageFlags::COMPUTE,
+            &[
+                Bind::Storage(&v.list.buffer),
+                Bind::StorageImage(v.radiance.view),
+                Bind::StorageImage(v.bounced[1].view),
+                Bind::StorageImage(v.bounced[0].view),
+            ],
+        )?;
+        let pipeline =
+            Pipeline::compute(ctx, "voxel bounce compose", shaders::VOXEL_BOUNCE_COMPOSE_COMP, &[set.layout], 0, &[])?;
+        let stale = StaleZero::new(ctx, volumes, &volumes.bounced[0])?;
+        Ok(BounceComposePass { volumes: volumes.clone(), pipeline, set, stale })
     }
 }
 
-impl Pass for BounceCopyPass {
+impl Pass for BounceComposePass {
     fn name(&self) -> &str {
-        "voxel bounce copy"
+        "voxel bounce compose"
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        vec![Use::image(&self.scratch, Access::TransferRead), Use::overwrite(&self.bounced, Access::TransferWrite)]
+        let v = &self.volumes;
+        let mut uses = vec![
+            Use::image(&v.radiance, Access::ComputeShaderReadStorage),
+            Use::image(&v.bounced[1], Access::ComputeShaderReadStorage),
+            Use::image(&v.bounced[0], Access::ComputeShaderWrite),
+        ];
+        uses.extend(list_reads(v));
+        if let Some(stale) = &self.stale {
+            uses.push(Use::image(&v.albedo, Access::ComputeShaderReadStorage));
+            uses.extend(stale.uses(v));
+        }
+        uses
     }
     fn queue(&self) -> QueueKind {
         QueueKind::Compute
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
-        let layers = vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        };
-        let region =
-            vk::ImageCopy::default().src_subresource(layers).dst_subresource(layers).extent(self.scratch.desc.extent);
-        unsafe {
-            ctx.device.cmd_copy_image(
-                cmd,
-                self.scratch.raw,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                self.bounced.raw,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                &[region],
-            )
-        };
+        if let Some(stale) = &self.stale {
+            stale.record(ctx, cmd, &self.volumes);
+        }
+        self.pipeline.bind(cmd, &[self.set.set]);
+        dispatch_list(&self.pipeline, cmd, &self.volumes, list_header::OCCUPIED);
     }
 }

@@ -1,9 +1,11 @@
-//! Voxel clears: every volume once before static voxelization (transfer), and before each
-//! dynamic update only the voxels not marked static (compute).
+//! Voxel clears: every volume and the work list's header once before static voxelization
+//! (transfer), and before each dynamic update only the voxels the last dynamic voxelization
+//! filled, the list's dynamic range (compute), which then becomes the stale list.
 
-use crate::gpu::{shaders, Access, Context, DescriptorSet, GpuResult, Pipeline};
+use super::voxel_list::{between, ListKeeper, ListStep};
+use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Pipeline};
 use crate::render::graph::{Pass, Use};
-use crate::render::voxel::VoxelVolumes;
+use crate::render::voxel::{list_header, VoxelVolumes};
 use ash::vk;
 use std::sync::Arc;
 
@@ -22,7 +24,10 @@ impl Pass for VoxelClearPass {
         "voxel clear"
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        self.volumes.all().into_iter().map(|v| Use::overwrite(v, Access::TransferWrite)).collect()
+        let mut uses: Vec<Use> =
+            self.volumes.all().into_iter().map(|v| Use::overwrite(v, Access::TransferWrite)).collect();
+        uses.push(Use::buffer(&self.volumes.list.buffer, Access::TransferWrite));
+        uses
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         for v in self.volumes.all() {
@@ -36,6 +41,8 @@ impl Pass for VoxelClearPass {
                 )
             };
         }
+        // An empty list: no entries, no groups in any range.
+        unsafe { ctx.device.cmd_fill_buffer(cmd, self.volumes.list.buffer.raw, 0, list_header::SIZE, 0) };
     }
 }
 
@@ -43,11 +50,16 @@ pub struct DynamicClearPass {
     volumes: Arc<VoxelVolumes>,
     pipeline: Pipeline,
     set: DescriptorSet,
+    keeper: Arc<ListKeeper>,
 }
 
 impl DynamicClearPass {
-    pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>) -> GpuResult<Self> {
-        let set = DescriptorSet::new(ctx, "voxel clear dynamic", vk::ShaderStageFlags::COMPUTE, &volumes.binds())?;
+    pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>, keeper: &Arc<ListKeeper>) -> GpuResult<Self> {
+        let stale = volumes.list.stale.as_ref().expect("a scene with dynamic objects has a stale list");
+        let mut binds = Vec::from(volumes.binds());
+        binds.push(Bind::Storage(&volumes.list.buffer));
+        binds.push(Bind::Storage(stale));
+        let set = DescriptorSet::new(ctx, "voxel clear dynamic", vk::ShaderStageFlags::COMPUTE, &binds)?;
         let pipeline = Pipeline::compute(
             ctx,
             "voxel clear dynamic",
@@ -56,7 +68,7 @@ impl DynamicClearPass {
             0,
             &[(2, u32::from(volumes.needs.emission))],
         )?;
-        Ok(DynamicClearPass { volumes: volumes.clone(), pipeline, set })
+        Ok(DynamicClearPass { volumes: volumes.clone(), pipeline, set, keeper: keeper.clone() })
     }
 }
 
@@ -65,11 +77,21 @@ impl Pass for DynamicClearPass {
         "voxel clear dynamic"
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        self.volumes.uses(Access::ComputeShaderWrite, Access::ComputeShaderReadStorage)
+        let v = &self.volumes;
+        let mut uses =
+            vec![Use::image(&v.albedo, Access::ComputeShaderWrite), Use::image(&v.normal, Access::ComputeShaderWrite)];
+        uses.extend(v.emission.as_ref().map(|e| Use::image(e, Access::ComputeShaderWrite)));
+        uses.push(Use::buffer(&v.list.buffer, Access::IndirectCommandRead));
+        uses.push(Use::buffer(&v.list.buffer, Access::ComputeShaderWrite));
+        uses.extend(v.list.stale.iter().map(|s| Use::buffer(s, Access::ComputeShaderWrite)));
+        uses
     }
-    fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        let n = self.volumes.grid.resolution;
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         self.pipeline.bind(cmd, &[self.set.set]);
-        self.pipeline.dispatch(cmd, [n; 3], [4; 3]);
+        self.pipeline.dispatch_indirect(cmd, &self.volumes.list.buffer, list_header::DYNAMIC);
+        // The bookkeeping rewrites the arguments the dispatch read and reads what it wrote.
+        let dispatched = [Access::IndirectCommandRead, Access::ComputeShaderWrite];
+        between(ctx, cmd, &dispatched, &[Access::ComputeShaderWrite]);
+        self.keeper.record(cmd, ListStep::Cleared);
     }
 }

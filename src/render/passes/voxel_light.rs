@@ -1,8 +1,10 @@
-//! Voxel illumination (compute): direct light (and emission) into the voxel radiance volume.
+//! Voxel illumination (compute): direct light (and emission) into the voxel radiance volume,
+//! at the occupied voxels of the work list (and zeroes at the stale ones, see voxel_list).
 
+use super::voxel_list::{dispatch_list, list_reads, StaleZero};
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline, Sampler};
 use crate::render::graph::{Pass, QueueKind, Use};
-use crate::render::voxel::VoxelVolumes;
+use crate::render::voxel::{list_header, VoxelVolumes};
 use crate::render::FrameBuffers;
 use crate::scene::{GiSettings, VoxelAttenuation, VoxelOcclusion};
 use ash::vk;
@@ -15,6 +17,7 @@ pub struct VoxelLightPass {
     pipeline: Pipeline,
     set: DescriptorSet,
     softness: f32,
+    stale: Option<StaleZero>,
     _sampler: Sampler,
 }
 
@@ -41,6 +44,7 @@ impl VoxelLightPass {
                 Bind::StorageImage(volumes.normal.view),
                 Bind::StorageImage(volumes.emission_or_albedo().view),
                 Bind::StorageImage(volumes.radiance.view),
+                Bind::Storage(&volumes.list.buffer),
             ],
         )?;
         let pipeline = Pipeline::compute(
@@ -62,6 +66,7 @@ impl VoxelLightPass {
             pipeline,
             set,
             softness: gi.voxel_shadow_softness,
+            stale: StaleZero::new(ctx, volumes, &volumes.radiance)?,
             _sampler: sampler,
         })
     }
@@ -77,19 +82,24 @@ impl Pass for VoxelLightPass {
             Use::image(&v.albedo, Access::ComputeShaderReadStorage),
             Use::image(&v.normal, Access::ComputeShaderReadStorage),
             Use::image(&self.shadow_atlas, Access::ComputeShaderReadDepth),
-            Use::overwrite(&v.radiance, Access::ComputeShaderWrite),
+            // Only occupied (and stale) voxels are written: the rest keep their zero.
+            Use::image(&v.radiance, Access::ComputeShaderWrite),
         ];
         uses.extend(v.emission.as_ref().map(|e| Use::image(e, Access::ComputeShaderReadStorage)));
         uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
+        uses.extend(list_reads(v));
+        uses.extend(self.stale.iter().flat_map(|s| s.uses(v)));
         uses
     }
     fn queue(&self) -> QueueKind {
         QueueKind::Compute
     }
-    fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        let n = self.volumes.grid.resolution;
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        if let Some(stale) = &self.stale {
+            stale.record(ctx, cmd, &self.volumes);
+        }
         self.pipeline.bind(cmd, &[self.set.set]);
         self.pipeline.push(cmd, &self.softness);
-        self.pipeline.dispatch(cmd, [n; 3], [4; 3]);
+        dispatch_list(&self.pipeline, cmd, &self.volumes, list_header::OCCUPIED);
     }
 }

@@ -1,8 +1,9 @@
 //! Voxelization (graphics queue): dominant-axis projection in a geometry shader, conservative
 //! coverage (VK_EXT_conservative_rasterization where present, geometry-shader dilation
 //! otherwise) and an exact triangle/voxel test per candidate voxel in the fragment shader,
-//! writing running averages of albedo, normal and emission. One pass for static geometry (run
-//! once, marks the static flags) and one for dynamic geometry (every update).
+//! writing running averages of albedo, normal and emission, and appending each newly occupied
+//! voxel to the work list. One pass for static geometry (run once, marks the static flags)
+//! and one for dynamic geometry (every update).
 
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, GraphicsDesc, Pipeline};
 use crate::render::graph::{Pass, Use};
@@ -31,6 +32,7 @@ impl Voxelizer {
         let mut binds = vec![Bind::Uniform(&frame.uniforms), Bind::Storage(&scene.instances)];
         binds.extend(scene.materials.binds());
         binds.extend(volumes.binds());
+        binds.push(Bind::Storage(&volumes.list.buffer));
         let set = DescriptorSet::new(
             ctx,
             "voxelize",
@@ -93,6 +95,8 @@ impl Pass for VoxelizePass {
         let mut uses = v.volumes.uses(Access::FragmentShaderWrite, Access::FragmentShaderWrite);
         uses.extend(v.frame.reads(Access::GraphicsShaderReadBuffer));
         uses.push(v.scene.instance_reads());
+        // Appends every voxel it gives a first sample to the work list.
+        uses.push(Use::buffer(&v.volumes.list.buffer, Access::FragmentShaderWrite));
         uses
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {

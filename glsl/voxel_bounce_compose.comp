@@ -1,0 +1,23 @@
+#version 460
+// The bounced radiance of every occupied voxel (work list): its direct radiance (this
+// update's, voxel_light.comp) plus the indirect light of its last bounce gather
+// (voxel_bounce.comp). Stale voxels are zeroed beforehand (voxel_stale.comp).
+#include "common.glsl"
+#include "voxel.glsl"
+
+layout(local_size_x = 64) in;
+
+#define VOXEL_LIST_BINDING 0
+#define VOXEL_LIST_QUALIFIER readonly
+#include "voxel_list.glsl"
+layout(set = 0, binding = 1, rgba16f) uniform readonly image3D vox_direct;
+layout(set = 0, binding = 2, rgba16f) uniform readonly image3D vox_indirect;
+layout(set = 0, binding = 3, rgba16f) uniform writeonly image3D vox_bounced;
+
+void main() {
+    uint entry = list_invocation();
+    if (entry >= vlist.occupied.count) return;
+    ivec3 c = unpack_voxel(vlist.entries[entry]);
+    vec3 sum = imageLoad(vox_direct, c).rgb + imageLoad(vox_indirect, c).rgb;
+    imageStore(vox_bounced, c, vec4(min(sum, vec3(HALF_MAX)), 1.0));
+}
