@@ -407,12 +407,13 @@ pub struct ListSnapshot {
     /// Voxels the last dynamic clear emptied.
     pub stale: Vec<[u32; 3]>,
     pub stale_groups: [u32; 3],
-    /// Appends that did not fit (0: the capacity is N^3).
+    /// Appends that did not fit: always 0, since the capacity bounds what voxelization can
+    /// append ([`list_capacity`]); a test checks it.
     pub dropped: u32,
 }
 
 impl ListSnapshot {
-    /// Decode the list header and entries (`header_and_entries`) and the stale entries.
+    /// Decode the list buffer's bytes (the header and the entries in use) and the stale list's.
     pub fn decode(resolution: u32, bytes: &[u8], stale_bytes: &[u8]) -> ListSnapshot {
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(bytes);
         let range = |offset: u64| {
@@ -514,5 +515,77 @@ impl Occupancy {
             bricks(4),
             bricks(8)
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Keyframe, Mesh, Motion, Object};
+    use glam::Mat4;
+
+    /// The test scene's grid [0, 2]^3 at 8^3 (voxels of 0.25) holding one triangle.
+    fn one_triangle(tri: [Vec3; 3], motion: Motion) -> (Scene, VoxelGrid) {
+        let mut s = crate::render::test_scene(vec![]);
+        s.settings.gi.voxel_resolution = 8;
+        s.meshes.push(Mesh {
+            name: "t".into(),
+            positions: tri.to_vec(),
+            normals: vec![Vec3::Y; 3],
+            uvs: vec![glam::Vec2::ZERO; 3],
+            indices: vec![0, 1, 2],
+            material: 0,
+            bounds: Aabb::EMPTY,
+        });
+        s.objects.push(Object { name: "o".into(), meshes: vec![0], transform: Mat4::IDENTITY, dynamic: true, motion });
+        let g = VoxelGrid::for_scene(&s);
+        (s, g)
+    }
+
+    #[test]
+    fn list_capacity_bounds_the_voxels_a_triangle_can_touch() {
+        let v = Vec3::new;
+        // A horizontal triangle at y = 1.1 over x, z in [0.1, 0.9] (voxels 0..3): 4 x 1 x 4
+        // voxels of its box, plus the neighbours its box touches within 0.01 voxel (none here).
+        let tri = [v(0.1, 1.1, 0.1), v(0.9, 1.1, 0.1), v(0.1, 1.1, 0.9)];
+        let (s, g) = one_triangle(tri, Motion::None);
+        assert_eq!(list_capacity(&s, &g), 4 * 1 * 4);
+        // On a voxel face (y = 1.0) it touches both layers.
+        let (s, g) = one_triangle(tri.map(|p| v(p.x, 1.0, p.z)), Motion::None);
+        assert_eq!(list_capacity(&s, &g), 4 * 2 * 4);
+        // Moving (and scaled up to 2 by a keyframe): a cube as wide as the enclosing sphere of
+        // the triangle twice as large, whatever its orientation: 0.8 * sqrt(2) * 2 * 2/sqrt(3)
+        // = 2.61 m = 10.5 voxels, capped at the 8 voxels of the grid: 8^3.
+        let key = |scale: f32| Keyframe {
+            time: 0.0,
+            translate: Vec3::ZERO,
+            rotate_deg: Vec3::ZERO,
+            scale: Vec3::splat(scale),
+        };
+        let (s, g) = one_triangle(tri, Motion::Keyframes(vec![key(1.0), key(2.0)]));
+        assert_eq!(list_capacity(&s, &g), 512);
+        // At scale 1: 1.31 m = 5.2 voxels, so 7 per axis.
+        let (s, g) = one_triangle(tri, Motion::Keyframes(vec![key(1.0)]));
+        assert_eq!(list_capacity(&s, &g), 7 * 7 * 7);
+        // Outside the grid: nothing.
+        let (s, g) = one_triangle(tri.map(|p| p + Vec3::splat(10.0)), Motion::None);
+        assert_eq!(list_capacity(&s, &g), 0);
+    }
+
+    #[test]
+    fn a_list_snapshot_decodes_the_header_and_packed_entries() {
+        let mut words = vec![0u32; list_header::SIZE as usize / 4];
+        words[..4].copy_from_slice(&[1, 1, 1, 2]); // occupied: groups, count
+        words[4..8].copy_from_slice(&[1, 1, 1, 1]); // dynamic
+        words[8..12].copy_from_slice(&[1, 1, 1, 1]); // stale
+        words[12] = 1; // static count
+        let pack = |c: [u32; 3]| c[0] | (c[1] << 10) | (c[2] << 20);
+        words.extend([pack([1, 2, 3]), pack([511, 0, 7]), pack([9, 9, 9])]); // a third, unused
+        let stale = [pack([4, 5, 6])];
+        let l = ListSnapshot::decode(512, bytemuck::cast_slice(&words), bytemuck::cast_slice(&stale));
+        assert_eq!(l.entries, vec![[1, 2, 3], [511, 0, 7]]);
+        assert_eq!((l.static_count, l.occupied_groups, l.stale.clone()), (1, [1, 1, 1], vec![[4, 5, 6]]));
+        let o = l.occupancy();
+        assert_eq!((o.occupied, o.static_occupied, o.bricks4, o.bricks8, o.voxels), (2, 1, 2, 2, 512u64.pow(3)));
     }
 }
