@@ -630,20 +630,22 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
     let o = &i.optional;
     let yn = |b: bool| if b { "yes" } else { "no" };
     outln!(
-        "  optional: geometryShader {} fragmentStoresAndAtomics {} depthClamp {} conservativeRasterization {} \
-         calibratedTimestamps {} shaderImageFloat32Atomics {}",
+        "  optional: geometryShader {} fragmentStoresAndAtomics {} depthClamp {} samplerAnisotropy {} \
+         conservativeRasterization {} calibratedTimestamps {} shaderImageFloat32Atomics {}",
         yn(o.geometry_shader),
         yn(o.fragment_stores_and_atomics),
         yn(o.depth_clamp),
+        yn(o.sampler_anisotropy),
         yn(o.conservative_rasterization),
         yn(o.calibrated_timestamps),
         yn(o.shader_image_float32_atomics)
     );
     outln!(
-        "  timestamp period: {} ns; maxImageDimension2D {}, maxImageDimension3D {}",
+        "  timestamp period: {} ns; maxImageDimension2D {}, maxImageDimension3D {}, maxSamplerAnisotropy {}",
         i.timestamp_period_ns,
         i.limits.max_image_dimension2_d,
-        i.limits.max_image_dimension3_d
+        i.limits.max_image_dimension3_d,
+        i.limits.max_sampler_anisotropy
     );
     outln!("  validation: {}", if ctx.validation_enabled { "on" } else { "off" });
     if let Some(scene) = scene {
@@ -672,6 +674,7 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
         );
         let before = ctx.allocated_bytes();
         let time = scene.settings.time;
+        let textures = scene.textures.len();
         let mut renderer = Renderer::new(&ctx, scene)?;
         outln!("  passes (first frame): {}", renderer.pass_names(false).join(" -> "));
         for img in renderer.images() {
@@ -681,6 +684,12 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
         if let Some(list) = renderer.voxels().map(|v| v.list.bytes()) {
             outln!("  buffer voxel work lists: {:.2} MiB", list as f64 / (1024.0 * 1024.0));
         }
+        outln!(
+            "  textures: {} with mip chains, {:.2} MiB (anisotropic filtering {}x)",
+            textures,
+            renderer.texture_bytes() as f64 / (1024.0 * 1024.0),
+            dvsgi::render::scene_gpu::max_anisotropy(&ctx)
+        );
         outln!(
             "  GPU memory allocated for the scene and frame: {:.2} MiB",
             (ctx.allocated_bytes() - before) as f64 / (1024.0 * 1024.0)

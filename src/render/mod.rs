@@ -9,6 +9,7 @@ pub mod lights;
 pub mod passes;
 pub mod scene_gpu;
 pub mod schedule;
+pub mod texture;
 pub mod voxel;
 
 use crate::gpu::{Access, Buffer, Context, GpuError, GpuResult};
@@ -250,6 +251,11 @@ impl Renderer {
     /// whatever `gi.update_interval` says.
     pub fn request_voxel_update(&mut self) {
         self.update_requested = true;
+    }
+
+    /// GPU memory of the scene's textures with their mip chains.
+    pub fn texture_bytes(&self) -> u64 {
+        self.scene_gpu.materials.texture_bytes()
     }
 
     /// The voxel volumes, when the scene has them.

@@ -106,6 +106,8 @@ impl MaterialTable {
         } else {
             None
         };
+        // Trilinear across the mip chain, anisotropic where the device has it.
+        let anisotropy = max_anisotropy(ctx);
         let sampler = Sampler::new(
             ctx,
             "texture sampler",
@@ -116,9 +118,16 @@ impl MaterialTable {
                 .address_mode_u(vk::SamplerAddressMode::REPEAT)
                 .address_mode_v(vk::SamplerAddressMode::REPEAT)
                 .address_mode_w(vk::SamplerAddressMode::REPEAT)
+                .anisotropy_enable(anisotropy > 1.0)
+                .max_anisotropy(anisotropy)
                 .max_lod(vk::LOD_CLAMP_NONE),
         )?;
         Ok(MaterialTable { buffer, textures, placeholder_texture, sampler })
+    }
+
+    /// GPU memory of the scene's textures with their mip chains (the placeholder excluded).
+    pub fn texture_bytes(&self) -> u64 {
+        self.textures.iter().map(|t| t.bytes).sum()
     }
 
     /// Views for the texture descriptor array (never empty).
@@ -141,6 +150,16 @@ impl MaterialTable {
             Bind::Storage(&self.buffer),
             Bind::SampledArray(self.texture_views(), self.sampler.raw, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
         ]
+    }
+}
+
+/// The anisotropy texture sampling uses: up to 16, as far as the device allows (1 = off,
+/// without `samplerAnisotropy`).
+pub fn max_anisotropy(ctx: &Context) -> f32 {
+    if ctx.info.optional.sampler_anisotropy {
+        ctx.info.limits.max_sampler_anisotropy.clamp(1.0, 16.0)
+    } else {
+        1.0
     }
 }
 
@@ -176,26 +195,43 @@ pub fn upload_buffer(ctx: &Arc<Context>, name: &str, data: &[u8], usage: vk::Buf
     Ok(buffer)
 }
 
-/// Upload an sRGB RGBA8 texture, left in SHADER_READ_ONLY_OPTIMAL for sampling anywhere.
+/// Upload an sRGB RGBA8 texture with its full mip chain (`render::texture`, linear-light box
+/// filter), left in SHADER_READ_ONLY_OPTIMAL for sampling anywhere.
 pub fn upload_texture(ctx: &Arc<Context>, name: &str, width: u32, height: u32, rgba8: &[u8]) -> GpuResult<Image> {
-    let image = Image::new(
-        ctx,
-        name,
-        ImageDesc::d2(
-            vk::Format::R8G8B8A8_SRGB,
-            width,
-            height,
-            vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
-        ),
-    )?;
+    let levels = super::texture::mip_chain(width, height, rgba8);
+    let mut desc = ImageDesc::d2(
+        vk::Format::R8G8B8A8_SRGB,
+        width,
+        height,
+        vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+    );
+    desc.mip_levels = levels.len() as u32;
+    let image = Image::new(ctx, name, desc)?;
+    let bytes: Vec<u8> = levels.iter().flat_map(|l| l.rgba8.iter().copied()).collect();
     let staging = Buffer::new(
         ctx,
         &format!("{name} staging"),
-        rgba8.len() as u64,
+        bytes.len() as u64,
         vk::BufferUsageFlags::TRANSFER_SRC,
         MemoryLocation::CpuToGpu,
     )?;
-    staging.write(0, rgba8);
+    staging.write(0, &bytes);
+    let mut offset = 0u64;
+    let regions: Vec<vk::BufferImageCopy> = levels
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let base = image.copy_region();
+            let region = vk::BufferImageCopy {
+                buffer_offset: offset,
+                image_subresource: vk::ImageSubresourceLayers { mip_level: i as u32, ..base.image_subresource },
+                image_extent: vk::Extent3D { width: l.width, height: l.height, depth: 1 },
+                ..base
+            };
+            offset += l.rgba8.len() as u64;
+            region
+        })
+        .collect();
     let range = image.desc.full_range();
     ctx.one_shot(&format!("upload {name}"), |cmd| unsafe {
         let to_dst = barrier(&[Access::Nothing], &[Access::TransferWrite], true, true).unwrap();
@@ -208,7 +244,7 @@ pub fn upload_texture(ctx: &Arc<Context>, name: &str, width: u32, height: u32, r
             staging.raw,
             image.raw,
             vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            &[image.copy_region()],
+            &regions,
         );
         let to_read = barrier(
             &[Access::TransferWrite],

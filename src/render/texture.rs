@@ -1,0 +1,115 @@
+//! Texture mip chains, built once on the host at load. Each level is a box filter of the level
+//! above in linear light: texels are sRGB-decoded, averaged, and encoded again (alpha, which is
+//! linear, is averaged as it is). Averaging the encoded values instead would darken every
+//! minified contrast (a black/white checker would go to sRGB 128, linear 0.22, not 0.5).
+
+/// One level of a chain: RGBA8, sRGB-encoded colour, linear alpha.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MipLevel {
+    pub width: u32,
+    pub height: u32,
+    pub rgba8: Vec<u8>,
+}
+
+/// Levels of a full chain for a `width` x `height` image: down to 1 x 1.
+pub fn level_count(width: u32, height: u32) -> u32 {
+    32 - width.max(height).max(1).leading_zeros()
+}
+
+/// The full chain, level 0 (a copy of `rgba8`) first. Level n + 1 is max(1, size / 2) on each
+/// axis; each of its texels averages the texels of level n it covers: 2 x 2, or 3 along an odd
+/// axis at the last texel, so no texel of the level above is left out.
+pub fn mip_chain(width: u32, height: u32, rgba8: &[u8]) -> Vec<MipLevel> {
+    let mut levels = vec![MipLevel { width, height, rgba8: rgba8.to_vec() }];
+    let table = decode_table();
+    while let Some(top) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
+        let next = downsample(top, &table);
+        levels.push(next);
+    }
+    levels
+}
+
+fn downsample(src: &MipLevel, table: &[f32; 256]) -> MipLevel {
+    let (w, h) = (src.width, src.height);
+    let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+    // Source texels [lo, hi) covered by destination texel i of n along an axis of size s.
+    let span = |i: u32, n: u32, s: u32| -> (u32, u32) { (i * s / n, ((i + 1) * s / n).max(i * s / n + 1)) };
+    let mut out = Vec::with_capacity((nw * nh * 4) as usize);
+    for y in 0..nh {
+        let (y0, y1) = span(y, nh, h);
+        for x in 0..nw {
+            let (x0, x1) = span(x, nw, w);
+            let mut sum = [0.0f64; 4];
+            for sy in y0..y1 {
+                for sx in x0..x1 {
+                    let p = &src.rgba8[((sy * w + sx) * 4) as usize..][..4];
+                    for c in 0..3 {
+                        sum[c] += f64::from(table[p[c] as usize]);
+                    }
+                    sum[3] += f64::from(p[3]) / 255.0;
+                }
+            }
+            let n = f64::from((x1 - x0) * (y1 - y0));
+            for (c, s) in sum.iter().enumerate() {
+                let v = (s / n) as f32;
+                out.push(if c < 3 { encode_srgb(v) } else { (v * 255.0).round().clamp(0.0, 255.0) as u8 });
+            }
+        }
+    }
+    MipLevel { width: nw, height: nh, rgba8: out }
+}
+
+/// sRGB 8-bit code to linear (IEC 61966-2-1).
+pub fn decode_srgb(code: u8) -> f32 {
+    let c = f32::from(code) / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Linear to the nearest sRGB 8-bit code.
+pub fn encode_srgb(v: f32) -> u8 {
+    let v = v.clamp(0.0, 1.0);
+    let c = if v <= 0.003_130_8 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
+    (c * 255.0).round().clamp(0.0, 255.0) as u8
+}
+
+fn decode_table() -> [f32; 256] {
+    std::array::from_fn(|i| decode_srgb(i as u8))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn level_counts_reach_one_texel() {
+        assert_eq!(level_count(1, 1), 1);
+        assert_eq!(level_count(256, 256), 9);
+        assert_eq!(level_count(256, 16), 9);
+        assert_eq!(level_count(300, 5), 9); // 300 150 75 37 18 9 4 2 1
+    }
+
+    #[test]
+    fn srgb_round_trips_every_code() {
+        for code in 0..=255u8 {
+            assert_eq!(encode_srgb(decode_srgb(code)), code);
+        }
+    }
+
+    #[test]
+    fn odd_sizes_keep_every_texel() {
+        // 3 x 1: one level-1 texel averaging all three (white, white, black): linear 2/3.
+        let src = [255, 255, 255, 255, 255, 255, 255, 255, 0, 0, 0, 255];
+        let chain = mip_chain(3, 1, &src);
+        assert_eq!(chain.len(), 2);
+        assert_eq!(chain[1].rgba8, vec![encode_srgb(2.0 / 3.0); 3].into_iter().chain([255]).collect::<Vec<_>>());
+        // Non-square: 4 x 2 -> 2 x 1 -> 1 x 1.
+        let chain = mip_chain(4, 2, &[128; 32]);
+        let sizes: Vec<_> = chain.iter().map(|l| (l.width, l.height, l.rgba8.len())).collect();
+        assert_eq!(sizes, [(4, 2, 32), (2, 1, 8), (1, 1, 4)]);
+        assert!(chain.iter().all(|l| l.rgba8.iter().all(|&v| v == 128)), "a flat texture stays flat");
+    }
+}
