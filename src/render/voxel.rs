@@ -333,11 +333,7 @@ impl VoxelVolumes {
 
     /// Every volume that exists, for clears and memory reports.
     pub fn all(&self) -> Vec<&Arc<Image>> {
-        let mut v = vec![&self.albedo, &self.normal];
-        v.extend(self.emission.as_ref());
-        v.extend(self.flags.as_ref());
-        v.push(&self.radiance);
-        v.extend(self.bounced.iter());
+        let mut v = self.full_resolution();
         v.extend(self.directional.iter());
         v
     }
