@@ -8,12 +8,11 @@ layout(local_size_x = 64) in;
 
 layout(constant_id = 2) const bool HAS_EMISSION = false;
 
-layout(set = 0, binding = 0) uniform GridBlock { VoxelGrid grid; };
-layout(set = 0, binding = 1, r32ui) uniform writeonly uimage3D vox_albedo;
-layout(set = 0, binding = 2, r32ui) uniform writeonly uimage3D vox_normal;
-layout(set = 0, binding = 3, r32ui) uniform writeonly uimage3D vox_emission;
-#define VOXEL_LIST_BINDING 5
-#define VOXEL_STALE_BINDING 6
+layout(set = 0, binding = 0, r32ui) uniform writeonly uimage3D vox_albedo;
+layout(set = 0, binding = 1, r32ui) uniform writeonly uimage3D vox_normal;
+layout(set = 0, binding = 2, r32ui) uniform writeonly uimage3D vox_emission;
+#define VOXEL_LIST_BINDING 3
+#define VOXEL_STALE_BINDING 4
 #include "voxel_list.glsl"
 
 void main() {

@@ -179,8 +179,8 @@ def main():
         c = curve("triangles", [p[0] for p in points], points)
         c["scenes"] = scenes
         result["curves"].append(c)
-        cmd = f"bench --scene SCENE --width {args.size} --height {args.size} {common} " \
-              f"--set gi.voxel_resolution={args.resolution}".replace("--warmup 1", "--warmup 0")
+        cmd = f"bench --scene SCENE --width {args.size} --height {args.size} {common.replace('--warmup 1', '--warmup 0')} " \
+              f"--set gi.voxel_resolution={args.resolution}"
         md.append(markdown(c, "triangles (" + ", ".join(scenes) + ")", device, cmd))
     with open(os.path.join(args.out, "curves.json"), "w") as f:
         json.dump(result, f, indent=1)

@@ -367,7 +367,7 @@ impl VoxelVolumes {
     }
 
     /// Grid uniform, albedo, normal, emission (or albedo), flags (or placeholder): the
-    /// bindings, in this order, of every pass that writes the averaged volumes.
+    /// voxelizer's bindings of the averaged volumes, in this order.
     pub fn binds(&self) -> [Bind<'_>; 5] {
         [
             Bind::Uniform(&self.grid_buffer),

@@ -15,8 +15,16 @@ pub mod voxel_mips;
 pub mod voxel_view;
 pub mod voxelize;
 
+use crate::gpu::sync::{barrier, Access};
 use crate::gpu::Context;
 use ash::vk;
+
+/// A memory barrier between two commands of one pass (a dispatch whose results the next one
+/// reads or rewrites), from the same access table as every barrier between passes.
+pub(crate) fn memory_barrier(ctx: &Context, cmd: vk::CommandBuffer, prev: &[Access], next: &[Access]) {
+    let b = barrier(prev, next, false, false).expect("a write on one side needs a barrier").memory();
+    unsafe { ctx.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&[b])) };
+}
 
 pub(crate) fn set_viewport(ctx: &Context, cmd: vk::CommandBuffer, extent: vk::Extent2D) {
     unsafe {

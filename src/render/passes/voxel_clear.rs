@@ -2,7 +2,7 @@
 //! (transfer), and before each dynamic update only the voxels the last dynamic voxelization
 //! filled, the list's dynamic range (compute), which then becomes the stale list.
 
-use super::voxel_list::{between, ListKeeper, ListStep};
+use super::voxel_list::{ListKeeper, ListStep};
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Pipeline};
 use crate::render::graph::{Pass, Use};
 use crate::render::voxel::{list_header, VoxelVolumes};
@@ -56,9 +56,13 @@ pub struct DynamicClearPass {
 impl DynamicClearPass {
     pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>, keeper: &Arc<ListKeeper>) -> GpuResult<Self> {
         let stale = volumes.list.stale.as_ref().expect("a scene with dynamic objects has a stale list");
-        let mut binds = Vec::from(volumes.binds());
-        binds.push(Bind::Storage(&volumes.list.buffer));
-        binds.push(Bind::Storage(stale));
+        let binds = [
+            Bind::StorageImage(volumes.albedo.view),
+            Bind::StorageImage(volumes.normal.view),
+            Bind::StorageImage(volumes.emission_or_albedo().view),
+            Bind::Storage(&volumes.list.buffer),
+            Bind::Storage(stale),
+        ];
         let set = DescriptorSet::new(ctx, "voxel clear dynamic", vk::ShaderStageFlags::COMPUTE, &binds)?;
         let pipeline = Pipeline::compute(
             ctx,
@@ -91,7 +95,7 @@ impl Pass for DynamicClearPass {
         self.pipeline.dispatch_indirect(cmd, &self.volumes.list.buffer, list_header::DYNAMIC);
         // The bookkeeping rewrites the arguments the dispatch read and reads what it wrote.
         let dispatched = [Access::IndirectCommandRead, Access::ComputeShaderWrite];
-        between(ctx, cmd, &dispatched, &[Access::ComputeShaderWrite]);
+        super::memory_barrier(ctx, cmd, &dispatched, &[Access::ComputeShaderWrite]);
         self.keeper.record(cmd, ListStep::Cleared);
     }
 }

@@ -4,7 +4,6 @@
 //! Voxelization appends to the list; the voxel light, the bounce and the dynamic clear
 //! dispatch over it, so they cost what the scene's surfaces hold rather than N^3.
 
-use crate::gpu::sync::barrier;
 use crate::gpu::{shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuResult, Image, Pipeline};
 use crate::render::graph::{Pass, Use};
 use crate::render::voxel::{list_header, VoxelVolumes};
@@ -78,12 +77,6 @@ impl Pass for VoxelListPass {
     }
 }
 
-/// A memory barrier between two commands of one pass, from the access table.
-pub fn between(ctx: &Context, cmd: vk::CommandBuffer, prev: &[Access], next: &[Access]) {
-    let b = barrier(prev, next, false, false).expect("a write follows").memory();
-    unsafe { ctx.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&[b])) };
-}
-
 /// Dispatch `pipeline` (local size 64, glsl/include/voxel_list.glsl) over one range of the list.
 pub fn dispatch_list(pipeline: &Pipeline, cmd: vk::CommandBuffer, volumes: &VoxelVolumes, range: u64) {
     pipeline.dispatch_indirect(cmd, &volumes.list.buffer, range);
@@ -130,7 +123,7 @@ impl StaleZero {
     pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, volumes: &VoxelVolumes) {
         self.pipeline.bind(cmd, &[self.set.set]);
         dispatch_list(&self.pipeline, cmd, volumes, list_header::STALE);
-        between(ctx, cmd, &[Access::ComputeShaderWrite], &[Access::ComputeShaderWrite]);
+        super::memory_barrier(ctx, cmd, &[Access::ComputeShaderWrite], &[Access::ComputeShaderWrite]);
     }
 }
 

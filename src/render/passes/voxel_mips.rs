@@ -2,7 +2,6 @@
 //! radiance volume, each further level from the one below, by front-to-back integration along
 //! each direction (see glsl/aniso_mip.comp).
 
-use crate::gpu::sync::barrier;
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline};
 use crate::render::graph::{Pass, QueueKind, Use};
 use crate::render::voxel::VoxelVolumes;
@@ -115,14 +114,9 @@ impl Pass for VoxelMipPass {
         m.from_full.dispatch(cmd, [size(0); 3], [4; 3]);
         // Each level reads the one written by the previous dispatch: the dependency comes from
         // the same access table as every other barrier (storage write -> storage write/read).
-        let between = barrier(&[Access::ComputeShaderWrite], &[Access::ComputeShaderWrite], false, false)
-            .expect("write after write needs a barrier")
-            .memory();
         for (i, set) in m.upper_sets.iter().enumerate() {
             let level = i as u32 + 1;
-            unsafe {
-                ctx.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&[between]))
-            };
+            super::memory_barrier(ctx, cmd, &[Access::ComputeShaderWrite], &[Access::ComputeShaderWrite]);
             m.from_previous.bind(cmd, &[set.set]);
             m.from_previous.dispatch(cmd, [size(level); 3], [4; 3]);
         }
