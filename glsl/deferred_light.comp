@@ -6,6 +6,7 @@
 #include "common.glsl"
 #include "brdf.glsl"
 #include "lights.glsl"
+#define SHADOW_VIEWS_BINDING 2
 #include "shadow.glsl"
 #include "gbuffer_read.glsl"
 
@@ -18,7 +19,6 @@ layout(constant_id = 3) const uint OUTPUT = 0;  // 0 final, 1 indirect light onl
 
 layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
-layout(set = 0, binding = 2, std430) readonly buffer ShadowViews { ShadowView views[]; };
 layout(set = 0, binding = 3) uniform sampler2D g_depth;
 layout(set = 0, binding = 4) uniform sampler2D g_albedo;
 layout(set = 0, binding = 5) uniform sampler2D g_normal;
@@ -62,7 +62,7 @@ void main() {
         if (CONE_SHADOWS && i < 4u) {
             vis = cone_vis[i];
         } else if (l.shadow.x >= 0) {
-            int layer = shadow_view_index(l, P);
+            int layer = shadow_view_index(l, P, frame.shadow.x + 1.5 * frame.shadow.y + 2.0, frame.shadow.z);
             vis = shadow_visibility(shadow_map, views[layer], layer, P, N, s.wi, s.distance,
                                     frame.shadow.x, frame.shadow.y, frame.shadow.z);
         }

@@ -1,14 +1,17 @@
 #version 460
 // G-buffer: linear albedo, normal + shininess, specular, emission. Two-sided: the shading
 // normal is turned to the camera's side of the geometric surface, whatever the winding.
+// Alpha-masked materials are cut out; normal and height maps bend the shading normal.
 #include "common.glsl"
 #include "scene.glsl"
+#include "material.glsl"
 
 layout(constant_id = 0) const uint TEXTURE_COUNT = 1;
 
 layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 2, std430) readonly buffer Materials { Material materials[]; };
-layout(set = 0, binding = 3) uniform sampler2D textures[TEXTURE_COUNT];
+layout(set = 0, binding = 3) uniform texture2D textures[TEXTURE_COUNT];
+layout(set = 0, binding = 4) uniform sampler texture_sampler;
 
 layout(location = 0) in vec3 v_world;
 layout(location = 1) in vec3 v_normal;
@@ -20,18 +23,49 @@ layout(location = 1) out vec4 out_normal;    // RGBA16F: world normal, a shinine
 layout(location = 2) out vec4 out_specular;  // R8G8B8A8_SRGB: Ks
 layout(location = 3) out vec4 out_emission;  // RGBA16F: emitted radiance * radiance scale
 
+bool has(int tex) {
+    return tex >= 0 && uint(tex) < TEXTURE_COUNT;
+}
+
+// The shading normal bent by the material's normal or height map (explicit gradients: the
+// derivatives are taken before any fragment of the quad is discarded).
+vec3 bent_normal(Material m, vec3 n, vec3 ng, vec3 dpdx, vec3 dpdy, vec2 duvdx, vec2 duvdy) {
+    int tex = m.texture.z;
+    if (!has(tex) || m.texture.w == 0) return n;
+    UvFrame f = uv_frame(dpdx, dpdy, duvdx, duvdy);
+    vec3 p = n;
+    if (m.texture.w == NORMAL_MAP) {
+        p = normal_from_map(n, f, textureGrad(SCENE_TEXTURE(tex), v_uv, duvdx, duvdy).rgb);
+    } else if (m.texture.w == HEIGHT_MAP) {
+        // Central differences one texel apart at the level the footprint selects.
+        vec2 size = vec2(textureSize(SCENE_TEXTURE(tex), 0));
+        float lod = max(log2(max(length(duvdx * size), length(duvdy * size))), 0.0);
+        vec2 d = exp2(lod) / size;
+        float hu = textureLod(SCENE_TEXTURE(tex), v_uv + vec2(d.x, 0.0), lod).a
+                 - textureLod(SCENE_TEXTURE(tex), v_uv - vec2(d.x, 0.0), lod).a;
+        float hv = textureLod(SCENE_TEXTURE(tex), v_uv + vec2(0.0, d.y), lod).a
+                 - textureLod(SCENE_TEXTURE(tex), v_uv - vec2(0.0, d.y), lod).a;
+        p = normal_from_height(n, f, vec2(hu, hv) / (2.0 * d), m.emission.a);
+    }
+    return keep_facing(p, n, ng);
+}
+
 void main() {
     Material m = materials[v_material];
+    vec3 dpdx = dFdx(v_world), dpdy = dFdy(v_world);
+    vec2 duvdx = dFdx(v_uv), duvdy = dFdy(v_uv);
+    if (has(m.texture.y) && textureGrad(SCENE_TEXTURE(m.texture.y), v_uv, duvdx, duvdy).a < MASK_CUTOFF) discard;
     vec3 albedo = m.albedo.rgb;
     int tex = m.texture.x;
-    if (tex >= 0 && uint(tex) < TEXTURE_COUNT) {
-        albedo *= texture(textures[tex], v_uv).rgb;
+    if (has(tex)) {
+        albedo *= textureGrad(SCENE_TEXTURE(tex), v_uv, duvdx, duvdy).rgb;
     }
     vec3 V = frame.camera_pos.xyz - v_world;
-    vec3 ng = safe_normalize(cross(dFdx(v_world), dFdy(v_world)), vec3(0.0));
+    vec3 ng = safe_normalize(cross(dpdx, dpdy), vec3(0.0));
     if (dot(ng, V) < 0.0) ng = -ng;
     vec3 n = safe_normalize(v_normal, ng);
     if (dot(ng, ng) > 0.0 && dot(n, ng) < 0.0) n = -n;
+    n = bent_normal(m, n, ng, dpdx, dpdy, duvdx, duvdy);
     out_albedo = vec4(clamp(albedo, 0.0, 1.0), 1.0);
     out_normal = vec4(n, clamp(m.specular.a, 0.0, HALF_MAX));
     out_specular = vec4(clamp(m.specular.rgb, 0.0, 1.0), 1.0);

@@ -1,4 +1,5 @@
 #version 460
+#extension GL_EXT_control_flow_attributes : require
 // Reference path tracer (the ground truth for the accuracy sweep). Unbiased for dvsgi's scene
 // model: two-sided triangles, Lambert albedo/pi + energy-normalised Blinn-Phong (brdf.glsl),
 // two-sided Lambertian emission, and directional/point/spot lights (lights.glsl) sampled by
@@ -13,6 +14,7 @@
 #include "brdf.glsl"
 #include "lights.glsl"
 #include "scene.glsl"
+#include "material.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -51,7 +53,8 @@ layout(set = 0, binding = 2, std430) readonly buffer Tris { Tri tris[]; };
 layout(set = 0, binding = 3, std430) readonly buffer Shades { TriShade shades[]; };
 layout(set = 0, binding = 4, std430) readonly buffer Materials { Material materials[]; };
 layout(set = 0, binding = 5, std430) readonly buffer Lights { Light lights[]; };
-layout(set = 0, binding = 6) uniform sampler2D textures[TEXTURE_COUNT];
+layout(set = 0, binding = 6) uniform texture2D textures[TEXTURE_COUNT];
+layout(set = 0, binding = 9) uniform sampler texture_sampler;
 layout(set = 0, binding = 7, rgba32f) uniform image2D accum;     // rgb sum, a accepted samples
 layout(set = 0, binding = 8, rgba32f) uniform image2D accum_sq;  // rgb sum of squares, a rejected samples
 
@@ -100,6 +103,39 @@ float box_entry(BvhNode n, vec3 o, vec3 inv, float t_max) {
     return t0 <= t1 ? t0 : -1.0;
 }
 
+// Scene texture `tex` at `uv`, level 0 (the full-resolution truth), bilinear, through the
+// explicit-level sampler (no anisotropy: lavapipe applies it to explicit-level lookups in
+// compute shaders and blurs them). A uniform loop index: no non-uniform descriptor indexing
+// needed (lavapipe has none). The loop is kept a loop: unrolled, it puts one lookup per scene
+// texture at every call site (Crytek's Sponza: 37 textures, 7 call sites), and lavapipe takes
+// seconds longer to compile the shader.
+vec4 texel(int tex, vec2 uv) {
+    vec4 c = vec4(1.0);
+    [[dont_unroll]] for (uint i = 0u; i < TEXTURE_COUNT; ++i) {
+        if (i == uint(tex)) c = textureLod(SCENE_TEXTURE(i), uv, 0.0);
+    }
+    return c;
+}
+
+ivec2 texture_size(int tex) {
+    ivec2 s = ivec2(1);
+    [[dont_unroll]] for (uint i = 0u; i < TEXTURE_COUNT; ++i) {
+        if (i == uint(tex)) s = textureSize(SCENE_TEXTURE(i), 0);
+    }
+    return s;
+}
+
+vec2 hit_uv(TriShade sh, vec2 b) {
+    return sh.uv01.xy * (1.0 - b.x - b.y) + sh.uv01.zw * b.x + sh.uv2.xy * b.y;
+}
+
+// Whether triangle `i` is there at barycentrics `b`: false where its material's alpha mask
+// (level 0, the full-resolution truth) is under the cutoff.
+bool opaque_at(uint i, vec2 b) {
+    int mask = materials[floatBitsToUint(tris[i].v0.w)].texture.y;
+    return mask < 0 || texel(mask, hit_uv(shades[i], b)).a >= MASK_CUTOFF;
+}
+
 struct Hit {
     float t;
     uint tri;
@@ -138,7 +174,7 @@ bool trace(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
                 float v = dot(d, q) * inv_det;
                 if (v < 0.0 || u + v > 1.0) continue;
                 float t = dot(tri.e2.xyz, q) * inv_det;
-                if (t > 0.0 && t < hit.t) {
+                if (t > 0.0 && t < hit.t && opaque_at(i, vec2(u, v))) {
                     hit.t = t;
                     hit.tri = i;
                     hit.uv = vec2(u, v);
@@ -191,6 +227,19 @@ struct Surface {
     vec3 emission;
 };
 
+// The shading normal n bent by the material's normal or height map, in the triangle's own UV
+// frame, as gbuffer.frag does in a pixel's (level 0; a height map by central differences one
+// texel apart).
+vec3 bent_normal(Material m, Tri tri, TriShade sh, vec2 uv, vec3 n) {
+    UvFrame f = uv_frame(tri.e1.xyz, tri.e2.xyz, sh.uv01.zw - sh.uv01.xy, sh.uv2.xy - sh.uv01.xy);
+    int tex = m.texture.z;
+    if (m.texture.w == NORMAL_MAP) return normal_from_map(n, f, texel(tex, uv).rgb);
+    vec2 d = 1.0 / vec2(texture_size(tex));
+    float hu = texel(tex, uv + vec2(d.x, 0.0)).a - texel(tex, uv - vec2(d.x, 0.0)).a;
+    float hv = texel(tex, uv + vec2(0.0, d.y)).a - texel(tex, uv - vec2(0.0, d.y)).a;
+    return normal_from_height(n, f, vec2(hu, hv) / (2.0 * d), m.emission.a);
+}
+
 // The surface at a hit, with the same material rules as the G-buffer (gbuffer.frag).
 Surface surface_at(Hit h, vec3 o, vec3 d) {
     Tri tri = tris[h.tri];
@@ -205,15 +254,10 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
     s.ng = ng;
     s.ns = n;
     Material m = materials[floatBitsToUint(tri.v0.w)];
+    vec2 uv = hit_uv(sh, h.uv);
     vec3 albedo = m.albedo.rgb;
-    int tex = m.texture.x;
-    if (tex >= 0) {
-        vec2 uv = sh.uv01.xy * w + sh.uv01.zw * h.uv.x + sh.uv2.xy * h.uv.y;
-        // A uniform loop index: no non-uniform descriptor indexing needed.
-        for (uint i = 0u; i < TEXTURE_COUNT; ++i) {
-            if (i == uint(tex)) albedo *= textureLod(textures[i], uv, 0.0).rgb;
-        }
-    }
+    if (m.texture.x >= 0) albedo *= texel(m.texture.x, uv).rgb;
+    if (m.texture.z >= 0 && m.texture.w != 0) s.ns = keep_facing(bent_normal(m, tri, sh, uv, n), n, ng);
     s.albedo = clamp(albedo, 0.0, 1.0);
     s.ks = clamp(m.specular.rgb, 0.0, 1.0);
     s.shininess = clamp(m.specular.a, 0.0, HALF_MAX);

@@ -11,7 +11,7 @@ layout(set = 0, binding = 2, rgba8) uniform writeonly image2D out_display;
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(uvec2(px), frame.counts.xy))) return;
+    if (any(greaterThanEqual(px, imageSize(out_display)))) return;
     vec3 c = imageLoad(in_radiance, px).rgb;
     // Non-finite radiance shows as magenta, never silently as black or white.
     if (any(isnan(c)) || any(isinf(c))) {

@@ -6,6 +6,7 @@
 // stored as RGBA16F (alpha = 1 where occupied), clamped below the half-float maximum.
 #include "common.glsl"
 #include "lights.glsl"
+#define SHADOW_VIEWS_BINDING 2
 #include "shadow.glsl"
 #include "voxel.glsl"
 
@@ -17,7 +18,6 @@ layout(constant_id = 2) const bool RAYMARCH = false;
 
 layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
-layout(set = 0, binding = 2, std430) readonly buffer ShadowViews { ShadowView views[]; };
 layout(set = 0, binding = 3) uniform sampler2DArrayShadow shadow_map;
 layout(set = 0, binding = 4) uniform GridBlock { VoxelGrid grid; };
 layout(set = 0, binding = 5, r32ui) uniform readonly uimage3D vox_albedo;
@@ -109,7 +109,7 @@ void main() {
             vis = raymarch_visibility(g, s.wi, dist);
         } else if (l.shadow.x >= 0) {
             vec3 P = center + N * (0.5 * voxel);
-            int layer = shadow_view_index(l, P);
+            int layer = shadow_view_index(l, P, frame.shadow.x + 1.5 * frame.shadow.y + 2.0, frame.shadow.z);
             vis = shadow_visibility(shadow_map, views[layer], layer, P, N, s.wi, s.distance,
                                     frame.shadow.x, frame.shadow.y, frame.shadow.z);
         }

@@ -3,9 +3,13 @@
 // column within the triangle's depth range over the pixel square is tested exactly against
 // the triangle (separating axes) and, if touched, receives a running average of linear
 // albedo, normal and emission (atomic compare-and-swap on R32_UINT). The invocation that
-// gives a voxel its first albedo sample appends the voxel to the work list.
+// gives a voxel its first albedo sample appends the voxel to the work list. Textures are
+// sampled with the derivatives of this voxel-resolution raster, so at the mip level of one
+// voxel's footprint; an alpha-masked surface voxelizes only where its coverage over that
+// footprint reaches the cutoff (the mask's mips keep the coverage, render::texture).
 #include "common.glsl"
 #include "scene.glsl"
+#include "material.glsl"
 #include "voxel.glsl"
 #define VOXEL_LIST_BINDING 9
 #define VOXEL_LIST_APPEND_ONLY
@@ -16,7 +20,8 @@ layout(constant_id = 2) const bool HAS_EMISSION = false;
 layout(constant_id = 3) const bool HAS_FLAGS = false;
 
 layout(set = 0, binding = 2, std430) readonly buffer Materials { Material materials[]; };
-layout(set = 0, binding = 3) uniform sampler2D textures[TEXTURE_COUNT];
+layout(set = 0, binding = 3) uniform texture2D textures[TEXTURE_COUNT];
+layout(set = 0, binding = 10) uniform sampler texture_sampler;
 layout(set = 0, binding = 4) uniform GridBlock { VoxelGrid grid; };
 layout(set = 0, binding = 5, r32ui) uniform coherent uimage3D vox_albedo;
 layout(set = 0, binding = 6, r32ui) uniform coherent uimage3D vox_normal;
@@ -47,6 +52,17 @@ void list_append(ivec3 c) {
 }
 
 void main() {
+    // Textures first, while every invocation of the quad is alive (implicit derivatives).
+    Material m = materials[g_material];
+    vec3 albedo = m.albedo.rgb;
+    int tex = m.texture.x;
+    if (tex >= 0 && uint(tex) < TEXTURE_COUNT) {
+        albedo *= texture(SCENE_TEXTURE(tex), g_uv).rgb;
+    }
+    int mask = m.texture.y;
+    float coverage = mask >= 0 && uint(mask) < TEXTURE_COUNT ? texture(SCENE_TEXTURE(mask), g_uv).a : 1.0;
+    if (coverage < MASK_CUTOFF) return;
+
     int res = int(grid.dims.x);
     ivec2 px = ivec2(floor(gl_FragCoord.xy));
     vec3 a = to_uvw(g_t0, g_axis), b = to_uvw(g_t1, g_axis), c = to_uvw(g_t2, g_axis);
@@ -66,12 +82,6 @@ void main() {
     int k1 = min(int(floor(wmax)), res - 1);
     if (px.x < 0 || px.y < 0 || px.x >= res || px.y >= res) return;
 
-    Material m = materials[g_material];
-    vec3 albedo = m.albedo.rgb;
-    int tex = m.texture.x;
-    if (tex >= 0 && uint(tex) < TEXTURE_COUNT) {
-        albedo *= texture(textures[tex], g_uv).rgb;
-    }
     vec3 face = safe_normalize(cross(g_t1 - g_t0, g_t2 - g_t0), vec3(0.0, 1.0, 0.0));
     vec3 nrm = safe_normalize(g_normal, face);
     vec3 emission = m.emission.rgb / grid.params.x;

@@ -97,6 +97,9 @@ fn textured_square(texture: Texture) -> Scene {
             name: "textured".into(),
             albedo: Vec3::ONE,
             albedo_texture: Some(0),
+            mask_texture: None,
+            normal_texture: None,
+            bump_scale: 1.0,
             specular: Vec3::ZERO,
             shininess: 1.0,
             emission: Vec3::ZERO,
@@ -137,9 +140,10 @@ fn a_minified_checker_renders_its_linear_mean_without_aliasing() {
         width: 1024,
         height: 1024,
         rgba8: checker(1024, 1, [0, 0, 0], [255, 255, 255]),
+        usage: TextureUse::Color,
     };
     let g = encode_srgb(0.5);
-    let grey = Texture { path: PathBuf::from("grey"), width: 1, height: 1, rgba8: vec![g, g, g, 255] };
+    let grey = Texture { path: PathBuf::from("grey"), width: 1, height: 1, rgba8: vec![g, g, g, 255], usage: TextureUse::Color };
     let (checkered, _) = render(&ctx, textured_square(fine));
     let (flat, _) = render(&ctx, textured_square(grey));
     let lum = |o: &dvsgi::render::FrameOutput, i: usize| o.radiance[i * 4..i * 4 + 3].iter().sum::<f32>();

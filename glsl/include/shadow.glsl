@@ -1,6 +1,7 @@
 // Shadow-map lookup with normal offset and PCF (mirrors render::lights::GpuShadowView).
-// Every shadow view (directional: 1, spot: 1, point: 6 cube faces +X,-X,+Y,-Y,+Z,-Z) is a
-// layer of one depth array texture.
+// Every shadow view (directional: its cascades, then one over the whole scene; spot: 1;
+// point: 6 cube faces +X,-X,+Y,-Y,+Z,-Z) is a layer of one depth array texture. A shader
+// that looks views up defines SHADOW_VIEWS_BINDING before including this file.
 #ifndef DVSGI_SHADOW_GLSL
 #define DVSGI_SHADOW_GLSL
 #include "lights.glsl"
@@ -10,8 +11,25 @@ struct ShadowView {
     vec4 params;     // x world size of a texel (ortho) or per unit distance (perspective), y 1 = ortho
 };
 
-// The view of a light that covers P.
-int shadow_view_index(Light l, vec3 P) {
+#ifdef SHADOW_VIEWS_BINDING
+layout(set = 0, binding = SHADOW_VIEWS_BINDING, std430) readonly buffer ShadowViews { ShadowView views[]; };
+
+// The view of a light that covers P. A directional light's views are its cascades, finest
+// first, and last one over the whole scene (for voxels out of the camera's view): the first
+// that holds P with a margin for the normal offset and the PCF footprint (`margin` texels of
+// a `size`-texel map).
+int shadow_view_index(Light l, vec3 P, float margin, float size) {
+    if (uint(l.position.w) == LIGHT_DIRECTIONAL) {
+        float inner = 1.0 - 2.0 * margin / size;
+        for (int k = 0; k < l.shadow.y - 1; ++k) {
+            vec4 c = views[l.shadow.x + k].view_proj * vec4(P, 1.0);
+            vec3 ndc = c.xyz / c.w;
+            if (all(lessThanEqual(abs(ndc.xy), vec2(inner))) && ndc.z >= 0.0 && ndc.z <= 1.0) {
+                return l.shadow.x + k;
+            }
+        }
+        return l.shadow.x + l.shadow.y - 1;
+    }
     if (l.shadow.y == 6) {
         vec3 d = P - l.position.xyz;
         vec3 a = abs(d);
@@ -27,6 +45,7 @@ int shadow_view_index(Light l, vec3 P) {
     }
     return l.shadow.x;
 }
+#endif
 
 // Fraction of the light reaching P (1 lit, 0 shadowed). `radius` PCF radius and
 // `normal_bias` offset are in shadow-map texels; `size` is the map's side in texels.

@@ -189,7 +189,8 @@ enum Command {
         seed: u32,
         /// Spread each pixel's paths over its area (antialiased). By default they leave
         /// through the pixel centre, where the rasterizer samples, so error maps against the
-        /// renderer show lighting errors, not edge aliasing.
+        /// renderer show lighting errors, not edge aliasing. Always on for a scene with
+        /// `render.supersample` > 1, whose renderer averages over the pixel too.
         #[arg(long)]
         jitter: bool,
         #[command(flatten)]

@@ -17,6 +17,11 @@ pub enum Bind<'a> {
     StorageImage(vk::ImageView),
     /// Array of storage images (GENERAL layout).
     StorageImageArray(Vec<vk::ImageView>),
+    /// Array of sampled images without samplers (scene textures: they count against
+    /// maxPerStageDescriptorSampledImages, not the far smaller sampler limit, 32 on lavapipe).
+    ImageArray(Vec<vk::ImageView>, vk::ImageLayout),
+    /// A sampler on its own, combined with images in the shader.
+    Sampler(vk::Sampler),
 }
 
 impl Bind<'_> {
@@ -26,12 +31,14 @@ impl Bind<'_> {
             Bind::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
             Bind::Sampled(..) | Bind::SampledArray(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
             Bind::StorageImage(_) | Bind::StorageImageArray(_) => vk::DescriptorType::STORAGE_IMAGE,
+            Bind::ImageArray(..) => vk::DescriptorType::SAMPLED_IMAGE,
+            Bind::Sampler(_) => vk::DescriptorType::SAMPLER,
         }
     }
     fn count(&self) -> u32 {
         match self {
             Bind::SampledArray(v, ..) => v.len() as u32,
-            Bind::StorageImageArray(v) => v.len() as u32,
+            Bind::StorageImageArray(v) | Bind::ImageArray(v, _) => v.len() as u32,
             _ => 1,
         }
     }
@@ -113,6 +120,21 @@ impl DescriptorSet {
                         .map(|v| vk::DescriptorImageInfo { sampler: *sampler, image_view: *v, image_layout: *layout })
                         .collect(),
                 ),
+                Bind::ImageArray(views, layout) => image_infos.push(
+                    views
+                        .iter()
+                        .map(|v| vk::DescriptorImageInfo {
+                            sampler: vk::Sampler::null(),
+                            image_view: *v,
+                            image_layout: *layout,
+                        })
+                        .collect(),
+                ),
+                Bind::Sampler(sampler) => image_infos.push(vec![vk::DescriptorImageInfo {
+                    sampler: *sampler,
+                    image_view: vk::ImageView::null(),
+                    image_layout: vk::ImageLayout::UNDEFINED,
+                }]),
                 Bind::StorageImage(view) => image_infos.push(vec![vk::DescriptorImageInfo {
                     sampler: vk::Sampler::null(),
                     image_view: *view,
@@ -332,9 +354,10 @@ impl Pipeline {
                 offset: 24,
             },
         ];
+        let read: Vec<_> = attributes.into_iter().filter(|a| desc.vertex_attributes.contains(&a.location)).collect();
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
             .vertex_binding_descriptions(&bindings)
-            .vertex_attribute_descriptions(&attributes[..desc.vertex_attributes.clamp(1, 3)]);
+            .vertex_attribute_descriptions(&read);
         let input_assembly =
             vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
         let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
@@ -429,8 +452,8 @@ impl Pipeline {
 }
 
 pub struct GraphicsDesc<'a> {
-    /// How many of the vertex attributes (position, normal, uv) the vertex shader reads.
-    pub vertex_attributes: usize,
+    /// Locations of the vertex attributes the vertex shader reads: 0 position, 1 normal, 2 uv.
+    pub vertex_attributes: &'a [u32],
     pub vert: &'a [u8],
     pub geom: Option<&'a [u8]>,
     pub frag: Option<&'a [u8]>,

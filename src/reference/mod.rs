@@ -38,7 +38,9 @@ pub struct ReferenceOptions {
     pub batch_ms: f64,
     /// Spread each pixel's paths over its area (a box filter: antialiased edges). Off, every
     /// path leaves through the pixel's centre, where the rasterizer samples, so edges alias
-    /// exactly as in the renderer's image and the error measures the lighting alone.
+    /// exactly as in the renderer's image and the error measures the lighting alone. A scene
+    /// with `render.supersample` > 1 is always jittered: its renderer averages over the same
+    /// footprint.
     pub jitter: bool,
 }
 
@@ -275,7 +277,7 @@ impl PathTracer {
             inv_view_proj: view_proj.inverse().to_cols_array_2d(),
             camera: [0.0, 0.0, 0.0, 1e-5 * extent],
             size: [width, height, light_count, options.max_bounces.unwrap_or(UNLIMITED_BOUNCES).min(UNLIMITED_BOUNCES)],
-            info: [options.seed, options.jitter as u32, tris.corners.len() as u32, 0],
+            info: [options.seed, (options.jitter || s.supersample > 1) as u32, tris.corners.len() as u32, 0],
         };
         let uniform = Arc::new(Buffer::uniform(ctx, "reference parameters", &params)?);
         let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
@@ -299,6 +301,7 @@ impl PathTracer {
                 texture_bind,
                 Bind::StorageImage(accum.view),
                 Bind::StorageImage(accum_sq.view),
+                materials.lod_sampler_bind(),
             ],
         )?;
         let pipeline = Pipeline::compute(

@@ -39,7 +39,8 @@ impl Estimate {
         let shadow_views = crate::render::frame::shadow_map_views(scene);
         let mut e = Estimate::default();
         let voxel_view = !matches!(s.view, View::Final | View::Indirect | View::Ao);
-        let px = s.width as u64 * s.height as u64;
+        let (iw, ih) = s.internal_size();
+        let px = iw as u64 * ih as u64;
         // depth 4 + albedo 4 + normal 8 + specular 4 + emission 8, radiance 16, display 4.
         e.targets = px * (28 + 16 + 4);
         e.shadow_maps = if shadow_views > 0 { 4 * (s.shadow_map_size as u64).pow(2) * shadow_views as u64 } else { 4 };
@@ -72,7 +73,7 @@ impl Estimate {
                     let specular = s.gi.specular && scene.materials.iter().any(|m| m.is_glossy());
                     let per_px = 8 + if specular { 8 } else { 0 } + if cone_shadows(scene) { 4 } else { 0 };
                     let k = s.gi.downsample as u64;
-                    let low = (s.width as u64).div_ceil(k) * (s.height as u64).div_ceil(k);
+                    let low = (iw as u64).div_ceil(k) * (ih as u64).div_ceil(k);
                     e.targets += per_px * (low + if k > 1 { px } else { 0 });
                 }
             }

@@ -7,6 +7,7 @@ use super::passes::gi_trace::{GiPlaceholders, GiTargets, GiTracePass, GiUpsample
 use super::passes::lighting::{GiInputs, LightingOutput, LightingPass};
 use super::passes::readback::ReadbackPasses;
 use super::passes::shadow::ShadowPass;
+use super::passes::resolve::ResolvePass;
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::upload::UploadPass;
 use super::passes::voxel_bounce::{BounceComposePass, VoxelBouncePass};
@@ -85,6 +86,8 @@ pub struct FramePasses {
     /// Only when the shading uses cone-traced light.
     pub cones: Option<ConePasses>,
     pub shading: Shading,
+    /// Only with `render.supersample` > 1: radiance samples to output pixels.
+    pub resolve: Option<ResolvePass>,
     pub tonemap: TonemapPass,
     /// Created on the first frame whose output is read back (not for benchmarks).
     pub readback: Option<ReadbackPasses>,
@@ -125,7 +128,7 @@ impl FramePasses {
         shadow_views: u32,
     ) -> GpuResult<FramePasses> {
         let s = &scene.settings;
-        let (width, height) = (s.width, s.height);
+        let (width, height) = s.internal_size();
         let gbuffer = Arc::new(GBuffer::new(ctx, width, height)?);
         // Without shadowed lights the lighting pass still binds a 1x1 placeholder map.
         let (atlas_size, atlas_layers) = if shadow_views > 0 { (s.shadow_map_size, shadow_views) } else { (1, 1) };
@@ -142,7 +145,7 @@ impl FramePasses {
                     | vk::ImageUsageFlags::TRANSFER_SRC,
             ),
         )?);
-        let image2d = |name: &str, format| {
+        let sized = |name: &str, format, (width, height)| {
             Image::new(
                 ctx,
                 name,
@@ -150,8 +153,15 @@ impl FramePasses {
             )
             .map(Arc::new)
         };
-        let radiance = image2d("radiance", RADIANCE_FORMAT)?;
-        let display = image2d("display", DISPLAY_FORMAT)?;
+        let radiance = sized("radiance", RADIANCE_FORMAT, (width, height))?;
+        let display = sized("display", DISPLAY_FORMAT, (s.width, s.height))?;
+        let resolve = if s.supersample > 1 {
+            let resolved = sized("resolved radiance", RADIANCE_FORMAT, (s.width, s.height))?;
+            Some(ResolvePass::new(ctx, &radiance, &resolved, s.supersample)?)
+        } else {
+            None
+        };
+        let shown = resolve.as_ref().map_or(&radiance, |r| &r.resolved).clone();
         let voxel_view = !matches!(s.view, View::Final | View::Indirect | View::Ao);
         let voxels = if s.gi.mode == GiMode::Vct || voxel_view {
             let volumes = Arc::new(VoxelVolumes::new(ctx, scene)?);
@@ -267,7 +277,8 @@ impl FramePasses {
             gbuffer: GBufferPass::new(ctx, scene_gpu, frame, &gbuffer)?,
             cones,
             shading,
-            tonemap: TonemapPass::new(ctx, frame, &radiance, &display)?,
+            tonemap: TonemapPass::new(ctx, frame, &shown, &display)?,
+            resolve,
             readback: None,
             targets: vec![
                 gbuffer.depth.clone(),
@@ -278,7 +289,10 @@ impl FramePasses {
                 atlas.clone(),
                 radiance.clone(),
                 display.clone(),
-            ],
+            ]
+            .into_iter()
+            .chain((!Arc::ptr_eq(&shown, &radiance)).then_some(shown.clone()))
+            .collect(),
         })
     }
 
@@ -298,10 +312,11 @@ impl FramePasses {
     /// Create the readback passes if they do not exist yet.
     pub fn ensure_readback(&mut self, ctx: &Arc<Context>) -> GpuResult<()> {
         if self.readback.is_none() {
-            let radiance = match &self.shading {
-                Shading::Lighting(l) => l.radiance.clone(),
-                Shading::VoxelView(v) => v.radiance.clone(),
-                Shading::MipView(v) => v.radiance.clone(),
+            let radiance = match (&self.resolve, &self.shading) {
+                (Some(r), _) => r.resolved.clone(),
+                (None, Shading::Lighting(l)) => l.radiance.clone(),
+                (None, Shading::VoxelView(v)) => v.radiance.clone(),
+                (None, Shading::MipView(v)) => v.radiance.clone(),
             };
             self.readback = Some(ReadbackPasses::new(ctx, &radiance, &self.tonemap.display)?);
         }
@@ -373,6 +388,9 @@ impl FramePasses {
             // A voxel view needs no G-buffer.
             Shading::VoxelView(view) => passes.push(view),
             Shading::MipView(view) => passes.push(view),
+        }
+        if let Some(r) = &self.resolve {
+            passes.push(r);
         }
         passes.push(&self.tonemap);
         if let (true, Some(r)) = (state.readback, &self.readback) {

@@ -65,9 +65,80 @@ pub fn shadow_view_count(scene: &Scene) -> u32 {
         .filter(|l| l.cast_shadows)
         .map(|l| match l.kind {
             LightKind::Point { .. } => 6,
-            _ => 1,
+            LightKind::Directional { .. } => scene.settings.shadow_cascades + 1,
+            LightKind::Spot { .. } => 1,
         })
         .sum()
+}
+
+/// Weight of the logarithmic split in the cascades' split distances (the "practical split
+/// scheme", Zhang et al. 2006: 1 logarithmic, 0 uniform).
+const SPLIT_LAMBDA: f32 = 0.75;
+
+/// View-space distances of the cascade boundaries, `cascades + 1` of them from `near` to `far`.
+pub fn cascade_splits(near: f32, far: f32, cascades: u32) -> Vec<f32> {
+    (0..=cascades)
+        .map(|i| {
+            let f = i as f32 / cascades.max(1) as f32;
+            SPLIT_LAMBDA * near * (far / near).powf(f) + (1.0 - SPLIT_LAMBDA) * (near + (far - near) * f)
+        })
+        .collect()
+}
+
+/// The eight corners of the box `b`.
+fn corners(b: Aabb) -> [Vec3; 8] {
+    std::array::from_fn(|i| {
+        Vec3::new(
+            if i & 1 == 0 { b.min.x } else { b.max.x },
+            if i & 2 == 0 { b.min.y } else { b.max.y },
+            if i & 4 == 0 { b.min.z } else { b.max.z },
+        )
+    })
+}
+
+/// A directional light's views: `cascades` orthographic views fitted to slices of the camera's
+/// view (each the square in light space around the slice, clipped to the scene's bounds, on a
+/// texel grid), then one around the whole scene. All keep the scene's whole depth range, so
+/// every caster is in every view.
+fn sun_views(scene: &Scene, dir: Vec3, bounds: Aabb, center: Vec3, radius: f32, size: f32) -> Vec<GpuShadowView> {
+    let view = look_dir(center - dir * (radius * 2.0), dir);
+    let ortho = |x0: f32, x1: f32, y0: f32, y1: f32| {
+        let proj = flip_y(Mat4::orthographic_rh(x0, x1, y0, y1, radius * 0.5, radius * 3.5));
+        GpuShadowView { view_proj: (proj * view).to_cols_array_2d(), params: [(x1 - x0) / size, 1.0, 0.0, 0.0] }
+    };
+    let mut out = Vec::new();
+    let cascades = scene.settings.shadow_cascades;
+    let cam = &scene.camera;
+    let scene_pts = corners(bounds).map(|p| view.transform_point3(p));
+    let (lo, hi) = scene_pts.iter().fold((Vec3::MAX, Vec3::MIN), |(a, b), p| (a.min(*p), b.max(*p)));
+    // Beyond the farthest corner of the scene nothing is seen.
+    let far = corners(bounds).iter().map(|p| (*p - cam.position).length()).fold(cam.near * 2.0, f32::max).min(cam.far);
+    let splits = cascade_splits(cam.near, far, cascades);
+    let (w, h) = (scene.settings.width as f32, scene.settings.height as f32);
+    let tan_y = (cam.fov_y_deg.to_radians() * 0.5).tan();
+    let forward = (cam.target - cam.position).normalize_or(Vec3::NEG_Z);
+    let right = forward.cross(cam.up).normalize_or(Vec3::X);
+    let up = right.cross(forward);
+    for pair in splits.windows(2).take(cascades as usize) {
+        let mut a = Vec3::MAX;
+        let mut b = Vec3::MIN;
+        for d in [pair[0], pair[1]] {
+            for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
+                let p = cam.position + (forward + right * (sx * tan_y * w / h) + up * (sy * tan_y)) * d;
+                let q = view.transform_point3(p);
+                a = a.min(q);
+                b = b.max(q);
+            }
+        }
+        // Clipped to the scene, squared (square texels), snapped to whole texels.
+        let (a, b) = (a.max(lo), b.min(hi));
+        let side = (b.x - a.x).max(b.y - a.y).max(radius * 1e-4) * (1.0 + 4.0 / size);
+        let texel = side / size;
+        let c = ((a + b) * 0.5 / texel).round() * texel;
+        out.push(ortho(c.x - side * 0.5, c.x + side * 0.5, c.y - side * 0.5, c.y + side * 0.5));
+    }
+    out.push(ortho(-radius, radius, -radius, radius));
+    out
 }
 
 fn flip_y(mut p: Mat4) -> Mat4 {
@@ -115,14 +186,7 @@ pub fn build(
                 g.direction = [dir.x, dir.y, dir.z, 0.0];
                 g.color = [irradiance.x, irradiance.y, irradiance.z, 0.0];
                 if light.cast_shadows {
-                    let eye = center - dir * (radius * 2.0);
-                    let view = look_dir(eye, dir);
-                    let proj =
-                        flip_y(Mat4::orthographic_rh(-radius, radius, -radius, radius, radius * 0.5, radius * 3.5));
-                    views.push(GpuShadowView {
-                        view_proj: (proj * view).to_cols_array_2d(),
-                        params: [2.0 * radius / size, 1.0, 0.0, 0.0],
-                    });
+                    views.extend(sun_views(scene, dir, bounds, center, radius, size));
                 }
             }
             LightKind::Point { position, intensity } => {

@@ -146,9 +146,10 @@ impl Renderer {
         let s = &scene.settings;
         let (width, height) = (s.width, s.height);
         let max2d = ctx.info.limits.max_image_dimension2_d;
-        if width == 0 || height == 0 || width > max2d || height > max2d {
+        let (iw, ih) = s.internal_size();
+        if iw == 0 || ih == 0 || iw > max2d || ih > max2d {
             return Err(GpuError::Limit(format!(
-                "image size {width}x{height} is outside 1..={max2d} (this device's maxImageDimension2D)"
+                "image size {iw}x{ih} (with supersampling) is outside 1..={max2d} (this device's maxImageDimension2D)"
             )));
         }
         if s.shadow_map_size > max2d {
@@ -371,7 +372,10 @@ impl Renderer {
             view_proj: view_proj.to_cols_array_2d(),
             inv_view_proj: view_proj.inverse().to_cols_array_2d(),
             camera_pos: [cam.position.x, cam.position.y, cam.position.z, t],
-            counts: [self.width, self.height, self.scene.lights.len() as u32, tonemap],
+            counts: {
+                let (w, h) = self.scene.settings.internal_size();
+                [w, h, self.scene.lights.len() as u32, tonemap]
+            },
             shadow: [s.shadow_filter_radius, s.shadow_normal_bias, s.shadow_map_size as f32, 2f32.powf(s.exposure)],
             radiance_scale: [self.radiance_scale, 1.0 / self.radiance_scale, 0.0, 0.0],
             voxel: [0; 4],

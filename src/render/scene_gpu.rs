@@ -5,7 +5,7 @@
 use crate::gpu::sync::{barrier, Access};
 use crate::gpu::{Bind, Buffer, Context, GpuResult, Image, ImageDesc, Sampler};
 use crate::render::graph::Use;
-use crate::scene::Scene;
+use crate::scene::{Material, Scene, TextureUse};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec4};
@@ -28,9 +28,10 @@ pub struct GpuMaterial {
     pub albedo: [f32; 4],
     /// rgb Ks, a shininess exponent
     pub specular: [f32; 4],
-    /// rgb emitted radiance
+    /// rgb emitted radiance, a height map's bump scale (scene units per unit height)
     pub emission: [f32; 4],
-    /// x albedo texture index or -1
+    /// texture indices or -1: x albedo, y alpha mask, z normal or height map; w what z is
+    /// (`NORMAL_MAP` or `HEIGHT_MAP`, 0 without)
     pub texture: [i32; 4],
 }
 
@@ -56,6 +57,8 @@ pub struct Draw {
     pub material: u32,
     /// The object is dynamic (re-voxelized when it moves).
     pub dynamic: bool,
+    /// The material is alpha-masked (passes that only write depth need a fragment shader).
+    pub masked: bool,
 }
 
 pub struct SceneGpu {
@@ -75,7 +78,11 @@ pub struct MaterialTable {
     pub textures: Vec<Image>,
     /// Bound when the scene has no textures (descriptor arrays cannot be empty).
     pub placeholder_texture: Option<Image>,
+    /// Trilinear and anisotropic: for implicit-derivative and gradient lookups.
     pub sampler: Sampler,
+    /// Bilinear without anisotropy: for explicit-level lookups (the path tracer's level 0).
+    /// lavapipe applies anisotropy to explicit-level lookups in compute shaders and blurs them.
+    pub lod_sampler: Sampler,
 }
 
 impl MaterialTable {
@@ -86,8 +93,8 @@ impl MaterialTable {
             .map(|m| GpuMaterial {
                 albedo: Vec4::from((m.albedo, 1.0)).to_array(),
                 specular: Vec4::from((m.specular, m.shininess)).to_array(),
-                emission: Vec4::from((m.emission, 0.0)).to_array(),
-                texture: [m.albedo_texture.map(|t| t as i32).unwrap_or(-1), 0, 0, 0],
+                emission: Vec4::from((m.emission, m.bump_scale)).to_array(),
+                texture: texture_slots(scene, m),
             })
             .collect();
         let buffer = upload_buffer(
@@ -99,10 +106,10 @@ impl MaterialTable {
         let mut textures = Vec::new();
         for (i, t) in scene.textures.iter().enumerate() {
             let name = format!("texture {i} ({})", t.path.display());
-            textures.push(upload_texture(ctx, &name, t.width, t.height, &t.rgba8)?);
+            textures.push(upload_texture(ctx, &name, t.usage, t.width, t.height, &t.rgba8)?);
         }
         let placeholder_texture = if textures.is_empty() {
-            Some(upload_texture(ctx, "placeholder texture", 1, 1, &[255, 255, 255, 255])?)
+            Some(upload_texture(ctx, "placeholder texture", TextureUse::Color, 1, 1, &[255, 255, 255, 255])?)
         } else {
             None
         };
@@ -122,7 +129,19 @@ impl MaterialTable {
                 .max_anisotropy(anisotropy)
                 .max_lod(vk::LOD_CLAMP_NONE),
         )?;
-        Ok(MaterialTable { buffer, textures, placeholder_texture, sampler })
+        let lod_sampler = Sampler::new(
+            ctx,
+            "texture sampler (explicit level)",
+            &vk::SamplerCreateInfo::default()
+                .mag_filter(vk::Filter::LINEAR)
+                .min_filter(vk::Filter::LINEAR)
+                .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+                .address_mode_u(vk::SamplerAddressMode::REPEAT)
+                .address_mode_v(vk::SamplerAddressMode::REPEAT)
+                .address_mode_w(vk::SamplerAddressMode::REPEAT)
+                .max_lod(vk::LOD_CLAMP_NONE),
+        )?;
+        Ok(MaterialTable { buffer, textures, placeholder_texture, sampler, lod_sampler })
     }
 
     /// GPU memory of the scene's textures with their mip chains (the placeholder excluded).
@@ -144,13 +163,39 @@ impl MaterialTable {
         self.textures.len().max(1) as u32
     }
 
-    /// The two bindings a shading shader declares: the material table, then the textures.
+    /// Two bindings a shading shader declares in a row: the material table, then the textures
+    /// (sampled images). It declares their sampler, [`Self::sampler_bind`], as its last binding.
     pub fn binds(&self) -> [Bind<'_>; 2] {
         [
             Bind::Storage(&self.buffer),
-            Bind::SampledArray(self.texture_views(), self.sampler.raw, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
+            Bind::ImageArray(self.texture_views(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
         ]
     }
+
+    /// The textures' sampler (`texture_sampler` in glsl/include/material.glsl).
+    pub fn sampler_bind(&self) -> Bind<'_> {
+        Bind::Sampler(self.sampler.raw)
+    }
+
+    /// The sampler for shaders that only sample explicit levels (the path tracer).
+    pub fn lod_sampler_bind(&self) -> Bind<'_> {
+        Bind::Sampler(self.lod_sampler.raw)
+    }
+}
+
+/// `GpuMaterial::texture.w` for a tangent-space normal map (glsl/include/material.glsl).
+pub const NORMAL_MAP: i32 = 1;
+/// `GpuMaterial::texture.w` for a height map.
+pub const HEIGHT_MAP: i32 = 2;
+
+fn texture_slots(scene: &Scene, m: &Material) -> [i32; 4] {
+    let index = |t: Option<u32>| t.map(|t| t as i32).unwrap_or(-1);
+    let kind = match m.normal_texture.map(|t| scene.textures[t as usize].usage) {
+        Some(TextureUse::Normal) => NORMAL_MAP,
+        Some(TextureUse::Height) => HEIGHT_MAP,
+        _ => 0,
+    };
+    [index(m.albedo_texture), index(m.mask_texture), index(m.normal_texture), kind]
 }
 
 /// The anisotropy texture sampling uses: up to 16, as far as the device allows (1 = off,
@@ -195,10 +240,30 @@ pub fn upload_buffer(ctx: &Arc<Context>, name: &str, data: &[u8], usage: vk::Buf
     Ok(buffer)
 }
 
-/// Upload an sRGB RGBA8 texture with its full mip chain (`render::texture`, linear-light box
-/// filter), left in SHADER_READ_ONLY_OPTIMAL for sampling anywhere.
-pub fn upload_texture(ctx: &Arc<Context>, name: &str, width: u32, height: u32, rgba8: &[u8]) -> GpuResult<Image> {
-    let levels = super::texture::mip_chain(width, height, rgba8);
+/// Upload an RGBA8 texture with its full mip chain (`render::texture`: colour filtered in linear
+/// light, data maps as they are), left in SHADER_READ_ONLY_OPTIMAL for sampling anywhere.
+pub fn upload_texture(
+    ctx: &Arc<Context>,
+    name: &str,
+    usage: TextureUse,
+    width: u32,
+    height: u32,
+    rgba8: &[u8],
+) -> GpuResult<Image> {
+    let mut levels = super::texture::mip_chain_for(usage, width, height, rgba8);
+    // One format for every texture: lavapipe (Mesa 22.3, LLVM 15) crashes compiling the path
+    // tracer when textures of two formats are bound to it. Data in red, green and blue is
+    // stored sRGB-encoded, so the sampler's decode returns the data value (steps of at most
+    // 0.9% of full scale, at the top of the range). Masks and heights are read from alpha,
+    // which no sampler decodes, so they filter linearly at full 8-bit precision.
+    if usage != TextureUse::Color {
+        let code: [u8; 256] = std::array::from_fn(|c| super::texture::encode_srgb(c as f32 / 255.0));
+        for level in &mut levels {
+            for p in level.rgba8.chunks_exact_mut(4) {
+                p[..3].iter_mut().for_each(|c| *c = code[*c as usize]);
+            }
+        }
+    }
     let mut desc = ImageDesc::d2(
         vk::Format::R8G8B8A8_SRGB,
         width,
@@ -292,6 +357,7 @@ impl SceneGpu {
                     object: oi,
                     material: mesh.material,
                     dynamic: object.dynamic,
+                    masked: scene.materials.get(mesh.material as usize).is_some_and(|m| m.mask_texture.is_some()),
                 });
                 indices.extend_from_slice(&mesh.indices);
             }

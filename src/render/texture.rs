@@ -2,6 +2,10 @@
 //! above in linear light: texels are sRGB-decoded, averaged, and encoded again (alpha, which is
 //! linear, is averaged as it is). Averaging the encoded values instead would darken every
 //! minified contrast (a black/white checker would go to sRGB 128, linear 0.22, not 0.5).
+//! Data maps (masks, normal and height maps) are linear and averaged as they are; alpha-test
+//! masks then keep their coverage (see [`preserve_coverage`]).
+
+use crate::scene::{TextureUse, MASK_CUTOFF};
 
 /// One level of a chain: RGBA8, sRGB-encoded colour, linear alpha.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -20,16 +24,57 @@ pub fn level_count(width: u32, height: u32) -> u32 {
 /// axis; each of its texels averages the texels of level n it covers: 2 x 2, or 3 along an odd
 /// axis at the last texel, so no texel of the level above is left out.
 pub fn mip_chain(width: u32, height: u32, rgba8: &[u8]) -> Vec<MipLevel> {
+    mip_chain_for(TextureUse::Color, width, height, rgba8)
+}
+
+/// The full chain of a texture of the given use: colour in linear light, data as it is.
+pub fn mip_chain_for(usage: TextureUse, width: u32, height: u32, rgba8: &[u8]) -> Vec<MipLevel> {
     let mut levels = vec![MipLevel { width, height, rgba8: rgba8.to_vec() }];
-    let table = decode_table();
+    let srgb = usage == TextureUse::Color;
+    let table: [f32; 256] = if srgb { decode_table() } else { std::array::from_fn(|i| i as f32 / 255.0) };
     while let Some(top) = levels.last().filter(|l| l.width > 1 || l.height > 1) {
-        let next = downsample(top, &table);
+        let mut next = downsample(top, &table, srgb);
+        if usage == TextureUse::Mask {
+            preserve_coverage(&mut next, coverage(&levels[0].rgba8, 1.0));
+        }
         levels.push(next);
     }
     levels
 }
 
-fn downsample(src: &MipLevel, table: &[f32; 256]) -> MipLevel {
+/// Fraction of texels whose coverage (alpha) times `scale` reaches the cutoff.
+fn coverage(rgba8: &[u8], scale: f32) -> f32 {
+    let n = rgba8.len() / 4;
+    let cut = MASK_CUTOFF * 255.0;
+    let hit = rgba8.chunks_exact(4).filter(|p| f32::from(p[3]) * scale >= cut).count();
+    hit as f32 / n.max(1) as f32
+}
+
+/// Scales a mask level so that the fraction of its texels at or above the cutoff is as close as
+/// it gets to `target`, the fraction in level 0 (Castaño, "Computing alpha mipmaps", 2010).
+/// Averaged coverage alone makes thin cutouts (leaves, chains) fall under the cutoff and vanish
+/// at a distance; a bisection on the scale keeps their area.
+fn preserve_coverage(level: &mut MipLevel, target: f32) {
+    let (mut lo, mut hi) = (0.0f32, 4.0f32);
+    for _ in 0..16 {
+        let mid = 0.5 * (lo + hi);
+        if coverage(&level.rgba8, mid) < target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let scale = if (coverage(&level.rgba8, hi) - target).abs() <= (coverage(&level.rgba8, lo) - target).abs() {
+        hi
+    } else {
+        lo
+    };
+    for v in &mut level.rgba8 {
+        *v = (f32::from(*v) * scale).round().clamp(0.0, 255.0) as u8;
+    }
+}
+
+fn downsample(src: &MipLevel, table: &[f32; 256], srgb: bool) -> MipLevel {
     let (w, h) = (src.width, src.height);
     let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
     // Source texels [lo, hi) covered by destination texel i of n along an axis of size s.
@@ -52,7 +97,7 @@ fn downsample(src: &MipLevel, table: &[f32; 256]) -> MipLevel {
             let n = f64::from((x1 - x0) * (y1 - y0));
             for (c, s) in sum.iter().enumerate() {
                 let v = (s / n) as f32;
-                out.push(if c < 3 { encode_srgb(v) } else { (v * 255.0).round().clamp(0.0, 255.0) as u8 });
+                out.push(if c < 3 && srgb { encode_srgb(v) } else { (v * 255.0).round().clamp(0.0, 255.0) as u8 });
             }
         }
     }
@@ -111,5 +156,31 @@ mod tests {
         let sizes: Vec<_> = chain.iter().map(|l| (l.width, l.height, l.rgba8.len())).collect();
         assert_eq!(sizes, [(4, 2, 32), (2, 1, 8), (1, 1, 4)]);
         assert!(chain.iter().all(|l| l.rgba8.iter().all(|&v| v == 128)), "a flat texture stays flat");
+    }
+
+    #[test]
+    fn data_maps_average_as_they_are() {
+        // Black and white height texels average to 128 (not sRGB 188).
+        let chain = mip_chain_for(TextureUse::Height, 2, 1, &[0, 0, 0, 0, 255, 255, 255, 255]);
+        assert_eq!(chain[1].rgba8, [128, 128, 128, 128]);
+    }
+
+    #[test]
+    fn mask_mips_keep_their_coverage() {
+        // Noise-like coverage, uniform over 0..0.94 (mean 0.47, just under the cutoff): plain
+        // averaging loses the cutout at a distance; the kept chain does not.
+        let src: Vec<u8> = (0..64u32 * 64)
+            .flat_map(|i| [(i.wrapping_mul(2_654_435_761) >> 24) as u8 % 241; 4])
+            .collect();
+        let c0 = coverage(&src, 1.0);
+        let kept = mip_chain_for(TextureUse::Mask, 64, 64, &src);
+        let plain = mip_chain_for(TextureUse::Height, 64, 64, &src);
+        for k in 1..=3 {
+            let (c, p) = (coverage(&kept[k].rgba8, 1.0), coverage(&plain[k].rgba8, 1.0));
+            assert!((c - c0).abs() <= 0.1, "level {k}: coverage {c}, level 0 {c0}");
+            if k == 3 {
+                assert!((p - c0).abs() > 0.2, "plain averaging should have lost it: {p} vs {c0}");
+            }
+        }
     }
 }

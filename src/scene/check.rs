@@ -71,8 +71,23 @@ impl Scene {
             if !(colours.into_iter().all(finite_non_negative) && m.shininess.is_finite() && m.shininess >= 0.0) {
                 return Err(format!("material {k} `{}`: non-finite or negative values", m.name));
             }
-            if m.albedo_texture.is_some_and(|i| i as usize >= self.textures.len()) {
-                return Err(format!("material {k} `{}`: texture index out of range", m.name));
+            let maps = [
+                (m.albedo_texture, &[TextureUse::Color][..]),
+                (m.mask_texture, &[TextureUse::Mask][..]),
+                (m.normal_texture, &[TextureUse::Normal, TextureUse::Height][..]),
+            ];
+            for (map, uses) in maps {
+                let Some(i) = map else { continue };
+                match self.textures.get(i as usize) {
+                    None => return Err(format!("material {k} `{}`: texture index out of range", m.name)),
+                    Some(t) if !uses.contains(&t.usage) => {
+                        return Err(format!("material {k} `{}`: texture {i} is a {:?} map here", m.name, t.usage))
+                    }
+                    Some(_) => {}
+                }
+            }
+            if !m.bump_scale.is_finite() {
+                return Err(format!("material {k} `{}`: bump_scale not finite", m.name));
             }
         }
         for (k, tx) in self.textures.iter().enumerate() {

@@ -2,7 +2,7 @@
 //! conversion of a parsed file into a validated [`Scene`].
 
 use super::error::SceneError;
-use super::obj::{self, ObjData};
+use super::obj::{self, MapKind, ObjData};
 use super::types::*;
 use super::LoadOptions;
 use glam::{Mat4, Vec3};
@@ -99,11 +99,13 @@ pub(crate) struct RenderDef {
     pub exposure: f32,
     pub tonemap: ToneMap,
     pub shadow_map_size: u32,
+    pub shadow_cascades: u32,
     pub shadow_filter_radius: f32,
     pub shadow_normal_bias: f32,
     pub view: View,
     pub view_lod: f32,
     pub view_direction: ViewDirection,
+    pub supersample: u32,
 }
 
 /// The `[gi]` table is [`GiSettings`] itself.
@@ -119,11 +121,13 @@ impl Default for RenderDef {
             exposure: d.exposure,
             tonemap: d.tonemap,
             shadow_map_size: d.shadow_map_size,
+            shadow_cascades: d.shadow_cascades,
             shadow_filter_radius: d.shadow_filter_radius,
             shadow_normal_bias: d.shadow_normal_bias,
             view: d.view,
             view_lod: d.view_lod,
             view_direction: d.view_direction,
+            supersample: d.supersample,
         }
     }
 }
@@ -142,6 +146,29 @@ pub(crate) struct MaterialDef {
     pub emission: [f32; 3],
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub albedo_texture: Option<String>,
+    /// Alpha-test cutout: coverage from the image's alpha, or its red channel without alpha.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mask_texture: Option<String>,
+    /// Tangent-space normal map (OpenGL convention).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normal_texture: Option<String>,
+    /// Height map (mean of r, g, b), displacing by `bump_scale` scene units per unit height.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bump_texture: Option<String>,
+    #[serde(default = "one")]
+    pub bump_scale: f32,
+    #[serde(default)]
+    pub normal_maps: NormalMaps,
+}
+
+/// Which way a normal map's green channel points: up the image, along the OBJ's +v (OpenGL,
+/// Blender, most exporters), or down it (DirectX, CryEngine's `_ddn` maps, Unreal).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum NormalMaps {
+    #[default]
+    OpenGl,
+    DirectX,
 }
 
 /// `scale = 2.0` or `scale = [sx, sy, sz]`.
@@ -229,6 +256,9 @@ pub(crate) struct ObjectDef {
     pub motion: Option<MotionDef>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub keyframes: Option<Vec<KeyframeDef>>,
+    /// The convention of the normal maps its MTL names.
+    #[serde(default)]
+    pub normal_maps: NormalMaps,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -330,15 +360,29 @@ pub(crate) const RENDER_KEYS: &[&str] = &[
     "exposure",
     "tonemap",
     "shadow_map_size",
+    "shadow_cascades",
     "shadow_filter_radius",
     "shadow_normal_bias",
     "view",
     "view_lod",
     "view_direction",
+    "supersample",
 ];
-pub(crate) const MATERIAL_KEYS: &[&str] = &["name", "albedo", "specular", "shininess", "emission", "albedo_texture"];
+pub(crate) const MATERIAL_KEYS: &[&str] = &[
+    "name",
+    "albedo",
+    "specular",
+    "shininess",
+    "emission",
+    "albedo_texture",
+    "mask_texture",
+    "normal_texture",
+    "bump_texture",
+    "bump_scale",
+    "normal_maps",
+];
 pub(crate) const OBJECT_KEYS: &[&str] =
-    &["name", "obj", "material", "materials", "translate", "rotate", "scale", "dynamic", "motion", "keyframes"];
+    &["name", "obj", "material", "materials", "translate", "rotate", "scale", "dynamic", "motion", "keyframes", "normal_maps"];
 pub(crate) const MOTION_KEYS: &[&str] = &["axis", "pivot", "degrees_per_second", "velocity", "amplitude", "period"];
 pub(crate) const KEYFRAME_KEYS: &[&str] = &["time", "translate", "rotate", "scale"];
 pub(crate) const LIGHT_KEYS: &[&str] = &[
@@ -707,20 +751,51 @@ impl Ctx<'_> {
     }
 }
 
-fn texture_index(
-    textures: &mut Vec<Texture>,
-    cache: &mut HashMap<PathBuf, u32>,
-    path: &Path,
-    referenced_by: &str,
-) -> Result<u32, SceneError> {
-    if let Some(&i) = cache.get(path) {
-        return Ok(i);
+/// The scene's textures, each file loaded once per way of decoding it.
+#[derive(Default)]
+struct TextureSet {
+    textures: Vec<Texture>,
+    cache: HashMap<(PathBuf, MapKind, bool), u32>,
+}
+
+impl TextureSet {
+    /// `y_down`: normal maps among what `kind` may give are in the DirectX convention.
+    fn index(&mut self, path: &Path, referenced_by: &str, kind: MapKind, y_down: bool) -> Result<u32, SceneError> {
+        let y_down = y_down && matches!(kind, MapKind::Normal | MapKind::Bump);
+        let key = (path.to_path_buf(), kind, y_down);
+        if let Some(&i) = self.cache.get(&key) {
+            return Ok(i);
+        }
+        let tex = obj::load_texture(path, referenced_by, kind, y_down)?;
+        let i = self.textures.len() as u32;
+        self.textures.push(tex);
+        self.cache.insert(key, i);
+        Ok(i)
     }
-    let tex = obj::load_texture(path, referenced_by)?;
-    let i = textures.len() as u32;
-    textures.push(tex);
-    cache.insert(path.to_path_buf(), i);
-    Ok(i)
+
+    fn map(&mut self, map: &Option<obj::MtlMap>, kind: MapKind) -> Result<Option<u32>, SceneError> {
+        map.as_ref().map(|m| self.index(&m.path, &m.referenced_by, kind, false)).transpose()
+    }
+
+    /// An MTL material with its maps loaded.
+    fn mtl_material(&mut self, m: &obj::MtlMaterial, normal_maps: NormalMaps) -> Result<Material, SceneError> {
+        let y_down = normal_maps == NormalMaps::DirectX;
+        let normal_texture = match &m.bump {
+            Some((map, kind)) => Some(self.index(&map.path, &map.referenced_by, *kind, y_down)?),
+            None => None,
+        };
+        Ok(Material {
+            name: m.name.clone(),
+            albedo: m.albedo,
+            albedo_texture: self.map(&m.albedo_texture, MapKind::Color)?,
+            mask_texture: self.map(&m.mask_texture, MapKind::Mask)?,
+            normal_texture,
+            bump_scale: m.bump_scale,
+            specular: m.specular,
+            shininess: m.shininess,
+            emission: m.emission,
+        })
+    }
 }
 
 fn default_material() -> Material {
@@ -728,6 +803,9 @@ fn default_material() -> Material {
         name: "default".to_owned(),
         albedo: Vec3::splat(0.8),
         albedo_texture: None,
+        mask_texture: None,
+        normal_texture: None,
+        bump_scale: 1.0,
         specular: Vec3::ZERO,
         shininess: 1.0,
         emission: Vec3::ZERO,
@@ -804,6 +882,18 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
             return Err(ctx.invalid(key, format!("{v} is not in 1..=16384")));
         }
     }
+    if r.shadow_cascades > 4 {
+        return Err(ctx.invalid("render.shadow_cascades", format!("{} is not in 0..=4", r.shadow_cascades)));
+    }
+    if !(1..=4).contains(&r.supersample) {
+        return Err(ctx.invalid("render.supersample", format!("{} is not in 1..=4 (samples per pixel: its square)", r.supersample)));
+    }
+    if r.width.max(r.height) * r.supersample > 16384 {
+        return Err(ctx.invalid(
+            "render.supersample",
+            format!("{} times the image size is over 16384 pixels on a side", r.supersample),
+        ));
+    }
     if !(16..=8192).contains(&r.shadow_map_size) {
         return Err(ctx.invalid("render.shadow_map_size", format!("{} is not in 16..=8192", r.shadow_map_size)));
     }
@@ -822,11 +912,13 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         exposure: ctx.scalar("render.exposure", r.exposure)?,
         tonemap: r.tonemap,
         shadow_map_size: r.shadow_map_size,
+        shadow_cascades: r.shadow_cascades,
         shadow_filter_radius: ctx.scalar("render.shadow_filter_radius", r.shadow_filter_radius)?,
         shadow_normal_bias: ctx.scalar("render.shadow_normal_bias", r.shadow_normal_bias)?,
         view: r.view,
         view_lod: ctx.scalar("render.view_lod", r.view_lod)?,
         view_direction: r.view_direction,
+        supersample: r.supersample,
         gi: file.gi.clone(),
     };
     settings.gi.validate().map_err(|(key, message)| ctx.invalid(format!("gi.{key}"), message))?;
@@ -845,8 +937,7 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
 
     // [[materials]]
     let mut materials: Vec<Material> = Vec::new();
-    let mut textures: Vec<Texture> = Vec::new();
-    let mut tex_cache: HashMap<PathBuf, u32> = HashMap::new();
+    let mut textures = TextureSet::default();
     let mut by_name: HashMap<String, u32> = HashMap::new();
     for (i, m) in file.materials.iter().enumerate() {
         let key = format!("materials.{i}");
@@ -860,19 +951,30 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         if shininess < 0.0 {
             return Err(ctx.invalid(format!("{key}.shininess"), "must be >= 0"));
         }
-        let albedo_texture = match &m.albedo_texture {
-            None => None,
-            Some(t) => {
-                let p = ctx.resolve(t)?;
-                let r = format!("{} {key}.albedo_texture", path.display());
-                Some(texture_index(&mut textures, &mut tex_cache, &p, &r)?)
-            }
+        let bump_scale = ctx.scalar(&format!("{key}.bump_scale"), m.bump_scale)?;
+        if m.normal_texture.is_some() && m.bump_texture.is_some() {
+            return Err(ctx.invalid(format!("{key}.bump_texture"), "give normal_texture or bump_texture, not both"));
+        }
+        let mut map = |field: &str, file: &Option<String>, kind: MapKind| -> Result<Option<u32>, SceneError> {
+            let Some(t) = file else { return Ok(None) };
+            let p = ctx.resolve(t)?;
+            let y_down = m.normal_maps == NormalMaps::DirectX;
+            Ok(Some(textures.index(&p, &format!("{} {key}.{field}", path.display()), kind, y_down)?))
+        };
+        let albedo_texture = map("albedo_texture", &m.albedo_texture, MapKind::Color)?;
+        let mask_texture = map("mask_texture", &m.mask_texture, MapKind::Mask)?;
+        let normal_texture = match map("normal_texture", &m.normal_texture, MapKind::Normal)? {
+            Some(t) => Some(t),
+            None => map("bump_texture", &m.bump_texture, MapKind::Height)?,
         };
         by_name.insert(m.name.clone(), materials.len() as u32);
         materials.push(Material {
             name: m.name.clone(),
             albedo: ctx.color(&format!("{key}.albedo"), m.albedo)?,
             albedo_texture,
+            mask_texture,
+            normal_texture,
+            bump_scale,
             specular: ctx.color(&format!("{key}.specular"), m.specular)?,
             shininess,
             emission: ctx.color(&format!("{key}.emission"), m.emission)?,
@@ -894,7 +996,8 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
     // [[objects]]
     let mut meshes: Vec<Mesh> = Vec::new();
     let mut objects: Vec<Object> = Vec::new();
-    let mut obj_cache: HashMap<PathBuf, (ObjData, Vec<Option<u32>>)> = HashMap::new();
+    // Per file and normal-map convention (which decides how its materials' maps load).
+    let mut obj_cache: HashMap<(PathBuf, NormalMaps), (ObjData, Vec<Option<u32>>)> = HashMap::new();
     let mut default_mat: Option<u32> = None;
     // Objects with groups that have no material, said once after the loop (3000 objects must
     // not give 3000 warnings).
@@ -952,28 +1055,18 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         }
 
         let obj_path = ctx.resolve(&o.obj)?;
-        if !obj_cache.contains_key(&obj_path) {
+        let obj_key = (obj_path.clone(), o.normal_maps);
+        if !obj_cache.contains_key(&obj_key) {
             let data = obj::load_obj(&obj_path)?;
             // Bring this file's MTL materials into the scene (once per file).
             let mut mtl_ids = Vec::with_capacity(data.materials.len());
             for m in &data.materials {
-                let albedo_texture = match &m.albedo_texture {
-                    Some(p) => Some(texture_index(&mut textures, &mut tex_cache, p, &m.texture_ref)?),
-                    None => None,
-                };
                 mtl_ids.push(Some(materials.len() as u32));
-                materials.push(Material {
-                    name: m.name.clone(),
-                    albedo: m.albedo,
-                    albedo_texture,
-                    specular: m.specular,
-                    shininess: m.shininess,
-                    emission: m.emission,
-                });
+                materials.push(textures.mtl_material(m, o.normal_maps)?);
             }
-            obj_cache.insert(obj_path.clone(), (data, mtl_ids));
+            obj_cache.insert(obj_key.clone(), (data, mtl_ids));
         }
-        let Some((data, mtl_ids)) = obj_cache.get(&obj_path) else {
+        let Some((data, mtl_ids)) = obj_cache.get(&obj_key) else {
             continue;
         };
         for g in group_mats.keys() {
@@ -1071,7 +1164,7 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         lights.push(l);
     }
 
-    Ok(Scene { path: path.to_path_buf(), name, meshes, objects, materials, textures, camera, lights, settings, bounds })
+    Ok(Scene { path: path.to_path_buf(), name, meshes, objects, materials, textures: textures.textures, camera, lights, settings, bounds })
 }
 
 fn light(ctx: &Ctx, i: usize, l: &LightDef) -> Result<Light, SceneError> {

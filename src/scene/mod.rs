@@ -12,6 +12,7 @@ pub use preset::Preset;
 mod check;
 mod text;
 mod triangulate;
+pub mod maps;
 
 use std::path::{Path, PathBuf};
 

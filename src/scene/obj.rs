@@ -7,7 +7,7 @@
 //! form (see `Prescan::normalized`) so that it reads each statement the way it was checked.
 
 use super::error::SceneError;
-use super::types::{Aabb, Texture};
+use super::types::{Aabb, Texture, TextureUse};
 use glam::{DVec3, Vec2, Vec3};
 use std::cell::Cell;
 use std::collections::BTreeSet;
@@ -46,10 +46,33 @@ pub(crate) struct MtlMaterial {
     pub specular: Vec3,
     pub shininess: f32,
     pub emission: Vec3,
-    /// Resolved, existing path of `map_Kd`.
-    pub albedo_texture: Option<PathBuf>,
+    /// `map_Kd`.
+    pub albedo_texture: Option<MtlMap>,
+    /// `map_d`.
+    pub mask_texture: Option<MtlMap>,
+    /// `bump`, `map_bump` or `norm`, with what it is.
+    pub bump: Option<(MtlMap, MapKind)>,
+    /// `-bm` of the bump statement.
+    pub bump_scale: f32,
+}
+
+/// A texture statement's resolved, existing file.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct MtlMap {
+    pub path: PathBuf,
     /// "file.mtl line N" for messages about the texture.
-    pub texture_ref: String,
+    pub referenced_by: String,
+}
+
+/// How a texture file is to be decoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub(crate) enum MapKind {
+    Color,
+    Mask,
+    Normal,
+    Height,
+    /// A normal map or a height map, whichever the image looks like.
+    Bump,
 }
 
 impl MtlMaterial {
@@ -61,7 +84,9 @@ impl MtlMaterial {
             shininess: 1.0,
             emission: Vec3::ZERO,
             albedo_texture: None,
-            texture_ref: String::new(),
+            mask_texture: None,
+            bump: None,
+            bump_scale: 1.0,
         }
     }
 }
@@ -355,6 +380,52 @@ fn find_relative(dir: &Path, name: &str) -> (Option<PathBuf>, Vec<PathBuf>) {
     (None, tried)
 }
 
+/// The file name and `-bm` value of a texture statement. Options (`-s 1 1 1`, `-bm 0.5`,
+/// `-clamp on` ...) come before the file name, which may contain spaces.
+fn map_statement(path: &Path, ln: usize, kw: &str, rest: &str, args: &[&str]) -> Result<(String, Option<f32>), SceneError> {
+    let mut bm = None;
+    let mut i = 0;
+    while i < args.len() && args[i].starts_with('-') {
+        let values = match args[i] {
+            "-blendu" | "-blendv" | "-cc" | "-clamp" | "-imfchan" | "-texres" | "-type" | "-boost" | "-bm" => 1,
+            "-mm" => 2,
+            "-o" | "-s" | "-t" => args[i + 1..].iter().take(3).take_while(|a| a.parse::<f32>().is_ok()).count(),
+            _ => 0,
+        };
+        if args[i] == "-bm" {
+            let v = args.get(i + 1).map(|a| parse_finite(a)).transpose();
+            bm = v.map_err(|m| mtl_err(path, ln, format!("{kw} -bm: {m}")))?;
+        }
+        i += 1 + values;
+    }
+    let name = if i == 0 { rest.to_owned() } else { args[i.min(args.len())..].join(" ") };
+    if name.is_empty() {
+        return Err(mtl_err(path, ln, format!("{kw} without a file name")));
+    }
+    Ok((name, bm))
+}
+
+/// Resolves a texture statement's file. A missing texture is common in downloaded models: it
+/// is warned about and the material goes without that map (`None`).
+fn find_map(path: &Path, ln: usize, kw: &str, name: &str, material: &str) -> Result<Option<PathBuf>, SceneError> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let (found, tried) = find_relative(dir, name);
+    if found.is_some() {
+        return Ok(found);
+    }
+    if let Some(d) = tried.iter().find(|p| super::text::exists(p)) {
+        return Err(mtl_err(path, ln, format!("{kw} `{name}`: {} exists but is not a file", d.display())));
+    }
+    let without = if kw == "map_Kd" { "its untextured Kd colour" } else { "that map" };
+    log::warn!(
+        "{}: line {ln}: texture `{name}` ({kw} of material `{material}`) not found; looked at {}; \
+         the material goes without {without}",
+        path.display(),
+        join_paths(&tried)
+    );
+    Ok(None)
+}
+
 fn join_paths(v: &[PathBuf]) -> String {
     v.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
 }
@@ -393,7 +464,6 @@ fn read_mtl(path: &Path) -> Result<String, SceneError> {
 
 /// Parses an MTL file. Unknown statements are ignored; colours must be finite and >= 0.
 pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<MtlMaterial>, SceneError> {
-    let dir = path.parent().unwrap_or(Path::new("."));
     let fname = path.display().to_string();
     let mut mats: Vec<MtlMaterial> = Vec::new();
     for (ln, raw, _) in logical_lines(text) {
@@ -413,7 +483,7 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<MtlMaterial>, Sce
             mats.push(MtlMaterial::new(rest.to_owned()));
             continue;
         }
-        if !matches!(kw, "Kd" | "Ks" | "Ke" | "Ns" | "map_Kd") {
+        if !matches!(kw, "Kd" | "Ks" | "Ke" | "Ns" | "map_Kd" | "map_d" | "map_bump" | "bump" | "norm") {
             continue;
         }
         let Some(cur) = mats.last_mut() else {
@@ -434,35 +504,18 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<MtlMaterial>, Sce
                 }
                 cur.shininess = n;
             }
-            "map_Kd" => {
-                // Options (-s 1 1 1, -bm 0.5, ...) come before the file name.
-                let name = if rest.starts_with('-') { args.last().copied().unwrap_or("") } else { rest };
-                if name.is_empty() {
-                    return Err(mtl_err(path, ln, "map_Kd without a file name"));
-                }
-                let (found, tried) = find_relative(dir, name);
-                match found {
-                    Some(p) => {
-                        cur.albedo_texture = Some(p);
-                        cur.texture_ref = format!("{fname} line {ln}");
-                    }
-                    None => {
-                        if let Some(d) = tried.iter().find(|p| super::text::exists(p)) {
-                            return Err(mtl_err(
-                                path,
-                                ln,
-                                format!("map_Kd `{name}`: {} exists but is not a file", d.display()),
-                            ));
-                        }
-                        // A missing texture is common in downloaded models: warn and fall
-                        // back to the untextured Kd colour.
-                        log::warn!(
-                            "{fname}: line {ln}: texture `{name}` (map_Kd of material `{}`) not found; looked at {}; \
-                             using the material's untextured Kd colour",
-                            cur.name,
-                            join_paths(&tried)
-                        );
-                        cur.albedo_texture = None;
+            "map_Kd" | "map_d" | "map_bump" | "bump" | "norm" => {
+                let (name, bm) = map_statement(path, ln, kw, rest, &args)?;
+                let Some(found) = find_map(path, ln, kw, &name, &cur.name)? else { continue };
+                let map = MtlMap { path: found, referenced_by: format!("{fname} line {ln}") };
+                match kw {
+                    "map_Kd" => cur.albedo_texture = Some(map),
+                    "map_d" => cur.mask_texture = Some(map),
+                    // `bump` and `map_bump` name a height map or (CryEngine, many exporters) a
+                    // normal map: decided by the image at load. `norm` is a normal map.
+                    _ => {
+                        cur.bump = Some((map, if kw == "norm" { MapKind::Normal } else { MapKind::Bump }));
+                        cur.bump_scale = bm.unwrap_or(cur.bump_scale);
                     }
                 }
             }
@@ -726,9 +779,10 @@ fn finish_normals(
     (out_pos, out_nrm, out_uv, out_idx)
 }
 
-/// Decodes an image file to RGBA8 (kept sRGB-encoded). `referenced_by` names the file (and
-/// line) that asked for it.
-pub(crate) fn load_texture(path: &Path, referenced_by: &str) -> Result<Texture, SceneError> {
+/// Decodes an image file to RGBA8 in the encoding `kind` asks for (colour stays sRGB-encoded;
+/// normal maps in the DirectX convention, `y_down`, are turned to the OpenGL one).
+/// `referenced_by` names the file (and line) that asked for it.
+pub(crate) fn load_texture(path: &Path, referenced_by: &str, kind: MapKind, y_down: bool) -> Result<Texture, SceneError> {
     let err = |message: String| SceneError::Texture { path: path.to_path_buf(), message };
     super::text::check_regular(path, super::text::MAX_ASSET_BYTES)?;
     let reader = image::ImageReader::open(path)
@@ -745,5 +799,14 @@ pub(crate) fn load_texture(path: &Path, referenced_by: &str) -> Result<Texture, 
     if width == 0 || height == 0 {
         return Err(err(format!("texture has zero size (referenced by {referenced_by})")));
     }
-    Ok(Texture { path: path.to_path_buf(), width, height, rgba8: rgba.into_raw() })
+    let rgba8 = rgba.into_raw();
+    let usage = match kind {
+        MapKind::Color => TextureUse::Color,
+        MapKind::Mask => TextureUse::Mask,
+        MapKind::Normal => TextureUse::Normal,
+        MapKind::Height => TextureUse::Height,
+        MapKind::Bump => super::maps::bump_use(&rgba8),
+    };
+    let rgba8 = super::maps::encode_for(usage, rgba8, y_down);
+    Ok(Texture { path: path.to_path_buf(), width, height, rgba8, usage })
 }

@@ -863,6 +863,68 @@ fn texture_loads() {
     assert_eq!(s.meshes[0].uvs[2], Vec2::new(0.0, 0.0));
 }
 
+#[test]
+fn material_maps_load_by_kind() {
+    // Crytek's quirks: backslash paths, a greyscale RGB mask, a `_ddn` normal map named as a
+    // bump map (DirectX convention), a colour texture as a bump map, `-bm` before the name.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(dir.path().join("tex")).unwrap();
+    let save = |name: &str, px: [u8; 4]| {
+        image::RgbaImage::from_raw(1, 1, px.to_vec()).unwrap().save(dir.path().join("tex").join(name)).unwrap();
+    };
+    save("mask.png", [200, 200, 200, 255]);
+    save("ddn.png", [100, 60, 240, 255]);
+    save("bricks.png", [150, 120, 90, 255]);
+    write(dir.path(), "m.obj", &format!("mtllib m.mtl\nusemtl leaf\n{TRI_OBJ}usemtl wall\n{TRI_OBJ}"));
+    write(
+        dir.path(),
+        "m.mtl",
+        "newmtl leaf\nmap_d tex\\mask.png\nmap_bump tex\\ddn.png\nnewmtl wall\nbump -bm 0.25 tex\\bricks.png\n",
+    );
+    let scene = |convention: &str| {
+        let p = write(
+            dir.path(),
+            "s.toml",
+            &format!("{CAMERA}[[objects]]\nobj = \"m.obj\"\nnormal_maps = \"{convention}\"\n"),
+        );
+        load_default(&p).unwrap()
+    };
+    let s = scene("directx");
+    let by_name = |n: &str| s.materials.iter().find(|m| m.name == n).unwrap().clone();
+    let (leaf, wall) = (by_name("leaf"), by_name("wall"));
+    let tex = |i: Option<u32>| &s.textures[i.unwrap() as usize];
+    assert_eq!((tex(leaf.mask_texture).usage, tex(leaf.mask_texture).rgba8.clone()), (TextureUse::Mask, vec![200; 4]));
+    // The DirectX map is stored in the OpenGL convention: green turned around.
+    assert_eq!((tex(leaf.normal_texture).usage, tex(leaf.normal_texture).rgba8.clone()), (TextureUse::Normal, vec![100, 195, 240, 255]));
+    assert_eq!((tex(wall.normal_texture).usage, tex(wall.normal_texture).rgba8.clone()), (TextureUse::Height, vec![120; 4]));
+    assert_eq!((wall.bump_scale, leaf.bump_scale), (0.25, 1.0));
+    assert_eq!(scene("opengl").textures.iter().find(|t| t.usage == TextureUse::Normal).unwrap().rgba8, [100, 60, 240, 255]);
+
+    // Scene-file materials: both a normal and a bump map is refused, naming the key.
+    let p = write(
+        dir.path(),
+        "s2.toml",
+        &format!("{CAMERA}[[materials]]\nname = \"t\"\nnormal_texture = \"tex/ddn.png\"\nbump_texture = \"tex/bricks.png\"\n"),
+    );
+    assert_msg(&err_of(load_default(&p)), &["s2.toml", "materials.0.bump_texture", "not both"]);
+}
+
+#[test]
+fn supersampling_and_cascades_are_range_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    for (line, key) in [
+        ("supersample = 0", "render.supersample"),
+        ("supersample = 5", "render.supersample"),
+        ("shadow_cascades = 5", "render.shadow_cascades"),
+        ("width = 8192\nsupersample = 3", "render.supersample"),
+    ] {
+        let p = write(dir.path(), "s.toml", &format!("{CAMERA}[render]\n{line}\n"));
+        assert_msg(&err_of(load_default(&p)), &["s.toml", key]);
+    }
+    let p = write(dir.path(), "s.toml", &format!("{CAMERA}[render]\nsupersample = 2\nwidth = 100\nheight = 50\n"));
+    assert_eq!(load_default(&p).unwrap().settings.internal_size(), (200, 100));
+}
+
 // ---------------------------------------------------------------------------------------------
 // Geometry and materials
 // ---------------------------------------------------------------------------------------------

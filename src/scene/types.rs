@@ -178,6 +178,14 @@ pub struct Material {
     pub albedo: Vec3,
     /// Multiplies `albedo` when present (texture is sRGB-encoded, decoded to linear on sampling).
     pub albedo_texture: Option<u32>,
+    /// Alpha-test cutout (`map_d`): a `TextureUse::Mask` texture; the surface exists where its
+    /// coverage is at least [`MASK_CUTOFF`], in the G-buffer, shadow maps, voxels and path tracer.
+    pub mask_texture: Option<u32>,
+    /// Normal perturbation, in the G-buffer and the path tracer alike: a tangent-space normal
+    /// map (`TextureUse::Normal`) or a height map (`TextureUse::Height`).
+    pub normal_texture: Option<u32>,
+    /// A height map's displacement in scene units per unit of height (MTL `-bm`, default 1).
+    pub bump_scale: f32,
     /// Specular reflectance Ks; the lobe is Ks * (n+8)/(8 pi) * (N.H)^n.
     pub specular: Vec3,
     /// Blinn-Phong exponent n (Ns), >= 0.
@@ -195,13 +203,34 @@ impl Material {
     }
 }
 
-/// RGBA8 texels, sRGB-encoded, row-major, top row first.
+/// Coverage at or above which an alpha-masked surface is opaque.
+pub const MASK_CUTOFF: f32 = 0.5;
+
+/// What a texture holds, which decides its encoding and how its mip chain is filtered.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum TextureUse {
+    /// sRGB-encoded colour (alpha linear); mips average in linear light.
+    #[default]
+    Color,
+    /// Coverage in every channel, linear; mips keep the fraction of texels at or above
+    /// [`MASK_CUTOFF`] (so cutouts do not thin out or vanish with distance).
+    Mask,
+    /// Tangent-space unit normal, each component c stored as (c + 1) / 2, linear. OpenGL
+    /// convention: +x along +u, +y along +v of the OBJ's UVs (up in the image), +z outwards.
+    Normal,
+    /// Height in [0, 1] in every channel, linear: the surface is displaced along its normal by
+    /// `Material::bump_scale` scene units per unit of height (pbrt's bump mapping).
+    Height,
+}
+
+/// RGBA8 texels, row-major, top row first, encoded as `usage` says.
 #[derive(Debug, Clone)]
 pub struct Texture {
     pub path: PathBuf,
     pub width: u32,
     pub height: u32,
     pub rgba8: Vec<u8>,
+    pub usage: TextureUse,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -541,6 +570,10 @@ pub struct RenderSettings {
     pub tonemap: ToneMap,
     /// Side of each shadow-map view in texels.
     pub shadow_map_size: u32,
+    /// Shadow-map cascades of a directional light, fitted to slices of the camera's view
+    /// (0..=4). A directional light also has one view over the whole scene, for what lies
+    /// outside the cascades (voxels out of view).
+    pub shadow_cascades: u32,
     /// PCF kernel radius in shadow-map texels (0 = single hardware-filtered tap).
     pub shadow_filter_radius: f32,
     /// Depth bias in shadow-map texels along the surface normal.
@@ -551,7 +584,18 @@ pub struct RenderSettings {
     pub view_lod: f32,
     /// Direction shown by the `voxel-mip` view.
     pub view_direction: ViewDirection,
+    /// Supersampling: k x k samples per output pixel on an ordered grid, averaged in linear
+    /// light (a box filter over the pixel; the reference then jitters its paths over the same
+    /// footprint). 1 = one sample at the pixel centre.
+    pub supersample: u32,
     pub gi: GiSettings,
+}
+
+impl RenderSettings {
+    /// The size the frame is rendered at: the output size times `supersample`.
+    pub fn internal_size(&self) -> (u32, u32) {
+        (self.width * self.supersample, self.height * self.supersample)
+    }
 }
 
 impl Default for RenderSettings {
@@ -563,11 +607,13 @@ impl Default for RenderSettings {
             exposure: 0.0,
             tonemap: ToneMap::Aces,
             shadow_map_size: 1024,
+            shadow_cascades: 3,
             shadow_filter_radius: 1.5,
             shadow_normal_bias: 1.5,
             view: View::Final,
             view_lod: 0.0,
             view_direction: ViewDirection::Ray,
+            supersample: 1,
             gi: GiSettings::default(),
         }
     }

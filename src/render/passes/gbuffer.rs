@@ -84,13 +84,19 @@ impl GBufferPass {
             ctx,
             "gbuffer",
             vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
-            &[Bind::Uniform(&frame.uniforms), Bind::Storage(&scene.instances), materials, textures],
+            &[
+                Bind::Uniform(&frame.uniforms),
+                Bind::Storage(&scene.instances),
+                materials,
+                textures,
+                scene.materials.sampler_bind(),
+            ],
         )?;
         let pipeline = Pipeline::graphics(
             ctx,
             "gbuffer",
             &GraphicsDesc {
-                vertex_attributes: 3,
+                vertex_attributes: &[0, 1, 2],
                 vert: shaders::GBUFFER_VERT,
                 geom: None,
                 frag: Some(shaders::GBUFFER_FRAG),

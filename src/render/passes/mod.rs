@@ -4,6 +4,7 @@ pub mod gbuffer;
 pub mod gi_trace;
 pub mod lighting;
 pub mod readback;
+pub mod resolve;
 pub mod shadow;
 pub mod tonemap;
 pub mod upload;

@@ -14,7 +14,34 @@ pub struct ShadowPass {
     frame: FrameBuffers,
     pipeline: Pipeline,
     set: DescriptorSet,
+    /// For alpha-masked draws (only where the scene has some): the depth pipeline plus an
+    /// alpha test, which costs the early depth test, so opaque draws keep the plain one.
+    masked: Option<(Pipeline, DescriptorSet)>,
     views: u32,
+}
+
+fn depth_only<'a>(
+    atlas: &Image,
+    vert: &'a [u8],
+    frag: Option<&'a [u8]>,
+    attributes: &'a [u32],
+    spec: &'a [(u32, u32)],
+) -> GraphicsDesc<'a> {
+    GraphicsDesc {
+        vertex_attributes: attributes,
+        vert,
+        geom: None,
+        frag,
+        color_formats: &[],
+        depth_format: Some(atlas.desc.format),
+        depth_test: true,
+        depth_write: true,
+        cull: vk::CullModeFlags::NONE,
+        depth_bias: true,
+        depth_clamp: true,
+        conservative: false,
+        spec,
+    }
 }
 
 impl ShadowPass {
@@ -31,28 +58,29 @@ impl ShadowPass {
             vk::ShaderStageFlags::VERTEX,
             &[Bind::Storage(&scene.instances), Bind::Storage(&frame.shadow_views)],
         )?;
-        let pipeline = Pipeline::graphics(
-            ctx,
-            "shadow",
-            &GraphicsDesc {
-                vertex_attributes: 1,
-                vert: shaders::SHADOW_VERT,
-                geom: None,
-                frag: None,
-                color_formats: &[],
-                depth_format: Some(atlas.desc.format),
-                depth_test: true,
-                depth_write: true,
-                cull: vk::CullModeFlags::NONE,
-                depth_bias: true,
-                depth_clamp: true,
-                conservative: false,
-                spec: &[],
-            },
-            &[set.layout],
-            4,
-        )?;
-        Ok(ShadowPass { atlas: atlas.clone(), scene: scene.clone(), frame: frame.clone(), pipeline, set, views })
+        let pipeline =
+            Pipeline::graphics(ctx, "shadow", &depth_only(atlas, shaders::SHADOW_VERT, None, &[0], &[]), &[set.layout], 4)?;
+        let masked = if scene.draws.iter().any(|d| d.masked) {
+            let [materials, textures] = scene.materials.binds();
+            let set = DescriptorSet::new(
+                ctx,
+                "shadow (masked)",
+                vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+                &[
+                    Bind::Storage(&scene.instances),
+                    Bind::Storage(&frame.shadow_views),
+                    materials,
+                    textures,
+                    scene.materials.sampler_bind(),
+                ],
+            )?;
+            let spec = [(0, scene.materials.texture_count())];
+            let desc = depth_only(atlas, shaders::SHADOW_MASKED_VERT, Some(shaders::SHADOW_MASKED_FRAG), &[0, 2], &spec);
+            Some((Pipeline::graphics(ctx, "shadow (masked)", &desc, &[set.layout], 4)?, set))
+        } else {
+            None
+        };
+        Ok(ShadowPass { atlas: atlas.clone(), scene: scene.clone(), frame: frame.clone(), pipeline, set, masked, views })
     }
 }
 
@@ -87,7 +115,12 @@ impl Pass for ShadowPass {
                 // normal offset (shadow_normal_bias).
                 d.cmd_set_depth_bias(cmd, 1.0, 0.0, 1.5);
                 self.pipeline.push(cmd, &view);
-                self.scene.draw_all(ctx, cmd);
+                self.scene.draw_where(ctx, cmd, |d| !d.masked);
+                if let Some((pipeline, set)) = &self.masked {
+                    pipeline.bind(cmd, &[set.set]);
+                    pipeline.push(cmd, &view);
+                    self.scene.draw_where(ctx, cmd, |d| d.masked);
+                }
                 d.cmd_end_rendering(cmd);
             }
         }

@@ -33,6 +33,7 @@ impl Voxelizer {
         binds.extend(scene.materials.binds());
         binds.extend(volumes.binds());
         binds.push(Bind::Storage(&volumes.list.buffer));
+        binds.push(scene.materials.sampler_bind());
         let set = DescriptorSet::new(
             ctx,
             "voxelize",
@@ -44,7 +45,7 @@ impl Voxelizer {
             ctx,
             "voxelize",
             &GraphicsDesc {
-                vertex_attributes: 3,
+                vertex_attributes: &[0, 1, 2],
                 vert: shaders::GBUFFER_VERT,
                 geom: Some(shaders::VOXELIZE_GEOM),
                 frag: Some(shaders::VOXELIZE_FRAG),
