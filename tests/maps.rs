@@ -47,7 +47,13 @@ fn texture(name: &str, size: u32, usage: TextureUse, texel: impl Fn(u32, u32) ->
     Texture { path: PathBuf::from(name), width: size, height: size, rgba8, usage }
 }
 
-fn scene(meshes: Vec<Mesh>, materials: Vec<Material>, textures: Vec<Texture>, camera: Camera, lights: Vec<Light>) -> Scene {
+fn scene(
+    meshes: Vec<Mesh>,
+    materials: Vec<Material>,
+    textures: Vec<Texture>,
+    camera: Camera,
+    lights: Vec<Light>,
+) -> Scene {
     Scene {
         path: PathBuf::from("maps-test"),
         name: "maps test".into(),
@@ -118,9 +124,13 @@ fn masked_quad_scene() -> Scene {
         near: 0.1,
         far: 20.0,
     };
-    let mut s = scene(vec![floor, leaf], vec![material("floor", Vec3::splat(0.8)), red], vec![mask], camera, vec![
-        sun(v(1.0, -1.0, 0.0), 3.0),
-    ]);
+    let mut s = scene(
+        vec![floor, leaf],
+        vec![material("floor", Vec3::splat(0.8)), red],
+        vec![mask],
+        camera,
+        vec![sun(v(1.0, -1.0, 0.0), 3.0)],
+    );
     s.bounds = Some(Aabb { min: v(-3., -3., -3.), max: v(3., 3., 3.) });
     s
 }
@@ -154,7 +164,10 @@ fn an_alpha_masked_quad_is_cut_out_in_the_gbuffer_shadow_maps_and_path_tracer() 
         assert!((open - Vec3::splat(lit_floor)).abs().max_element() < 0.03 * lit_floor, "{who}: {open}");
         // The opaque half is there, red and lit.
         let leaf = look(Vec3::new(-0.5, 1.0, 0.0));
-        assert!((leaf.x - 3.0 * 0.8 / PI * (0.5f32).sqrt()).abs() < 0.03 * leaf.x && leaf.y < 0.2 * leaf.x, "{who}: {leaf}");
+        assert!(
+            (leaf.x - 3.0 * 0.8 / PI * (0.5f32).sqrt()).abs() < 0.03 * leaf.x && leaf.y < 0.2 * leaf.x,
+            "{who}: {leaf}"
+        );
         println!("{who}: hole {hole}, behind {behind}, open {open}, leaf {leaf}");
     }
 }
@@ -210,7 +223,8 @@ fn bumped_square(map: Texture, scale: f32) -> Scene {
     let mut m = material("bumped", Vec3::splat(0.8));
     m.normal_texture = Some(0);
     m.bump_scale = scale;
-    let camera = Camera { position: v(0., 0., 3.), target: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 45.0, near: 0.1, far: 10.0 };
+    let camera =
+        Camera { position: v(0., 0., 3.), target: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 45.0, near: 0.1, far: 10.0 };
     scene(vec![square], vec![m], vec![map], camera, vec![sun(v(0., 0., -1.), 1.0)])
 }
 
@@ -323,4 +337,3 @@ fn supersampled_textured_direct_light_matches_the_reference() {
     // Shadow edges (PCF against exact visibility) and the mask's edge may differ.
     assert!(far * 100 < n * 3 * 3, "{far} of {} values differ beyond noise", n * 3);
 }
-

@@ -143,7 +143,13 @@ fn a_minified_checker_renders_its_linear_mean_without_aliasing() {
         usage: TextureUse::Color,
     };
     let g = encode_srgb(0.5);
-    let grey = Texture { path: PathBuf::from("grey"), width: 1, height: 1, rgba8: vec![g, g, g, 255], usage: TextureUse::Color };
+    let grey = Texture {
+        path: PathBuf::from("grey"),
+        width: 1,
+        height: 1,
+        rgba8: vec![g, g, g, 255],
+        usage: TextureUse::Color,
+    };
     let (checkered, _) = render(&ctx, textured_square(fine));
     let (flat, _) = render(&ctx, textured_square(grey));
     let lum = |o: &dvsgi::render::FrameOutput, i: usize| o.radiance[i * 4..i * 4 + 3].iter().sum::<f32>();

@@ -113,34 +113,20 @@ impl MaterialTable {
         } else {
             None
         };
-        // Trilinear across the mip chain, anisotropic where the device has it.
+        // Trilinear with repeat; the sampler for implicit and gradient lookups is anisotropic
+        // where the device has it, the explicit-level one never is.
+        let base = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::LINEAR)
+            .min_filter(vk::Filter::LINEAR)
+            .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+            .address_mode_u(vk::SamplerAddressMode::REPEAT)
+            .address_mode_v(vk::SamplerAddressMode::REPEAT)
+            .address_mode_w(vk::SamplerAddressMode::REPEAT)
+            .max_lod(vk::LOD_CLAMP_NONE);
         let anisotropy = max_anisotropy(ctx);
-        let sampler = Sampler::new(
-            ctx,
-            "texture sampler",
-            &vk::SamplerCreateInfo::default()
-                .mag_filter(vk::Filter::LINEAR)
-                .min_filter(vk::Filter::LINEAR)
-                .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
-                .address_mode_u(vk::SamplerAddressMode::REPEAT)
-                .address_mode_v(vk::SamplerAddressMode::REPEAT)
-                .address_mode_w(vk::SamplerAddressMode::REPEAT)
-                .anisotropy_enable(anisotropy > 1.0)
-                .max_anisotropy(anisotropy)
-                .max_lod(vk::LOD_CLAMP_NONE),
-        )?;
-        let lod_sampler = Sampler::new(
-            ctx,
-            "texture sampler (explicit level)",
-            &vk::SamplerCreateInfo::default()
-                .mag_filter(vk::Filter::LINEAR)
-                .min_filter(vk::Filter::LINEAR)
-                .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
-                .address_mode_u(vk::SamplerAddressMode::REPEAT)
-                .address_mode_v(vk::SamplerAddressMode::REPEAT)
-                .address_mode_w(vk::SamplerAddressMode::REPEAT)
-                .max_lod(vk::LOD_CLAMP_NONE),
-        )?;
+        let sampler =
+            Sampler::new(ctx, "texture sampler", &base.anisotropy_enable(anisotropy > 1.0).max_anisotropy(anisotropy))?;
+        let lod_sampler = Sampler::new(ctx, "texture sampler (explicit level)", &base)?;
         Ok(MaterialTable { buffer, textures, placeholder_texture, sampler, lod_sampler })
     }
 
@@ -166,10 +152,7 @@ impl MaterialTable {
     /// Two bindings a shading shader declares in a row: the material table, then the textures
     /// (sampled images). It declares their sampler, [`Self::sampler_bind`], as its last binding.
     pub fn binds(&self) -> [Bind<'_>; 2] {
-        [
-            Bind::Storage(&self.buffer),
-            Bind::ImageArray(self.texture_views(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
-        ]
+        [Bind::Storage(&self.buffer), Bind::ImageArray(self.texture_views(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]
     }
 
     /// The textures' sampler (`texture_sampler` in glsl/include/material.glsl).

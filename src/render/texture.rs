@@ -169,9 +169,8 @@ mod tests {
     fn mask_mips_keep_their_coverage() {
         // Noise-like coverage, uniform over 0..0.94 (mean 0.47, just under the cutoff): plain
         // averaging loses the cutout at a distance; the kept chain does not.
-        let src: Vec<u8> = (0..64u32 * 64)
-            .flat_map(|i| [(i.wrapping_mul(2_654_435_761) >> 24) as u8 % 241; 4])
-            .collect();
+        let src: Vec<u8> =
+            (0..64u32 * 64).flat_map(|i| [(i.wrapping_mul(2_654_435_761) >> 24) as u8 % 241; 4]).collect();
         let c0 = coverage(&src, 1.0);
         let kept = mip_chain_for(TextureUse::Mask, 64, 64, &src);
         let plain = mip_chain_for(TextureUse::Height, 64, 64, &src);

@@ -381,8 +381,19 @@ pub(crate) const MATERIAL_KEYS: &[&str] = &[
     "bump_scale",
     "normal_maps",
 ];
-pub(crate) const OBJECT_KEYS: &[&str] =
-    &["name", "obj", "material", "materials", "translate", "rotate", "scale", "dynamic", "motion", "keyframes", "normal_maps"];
+pub(crate) const OBJECT_KEYS: &[&str] = &[
+    "name",
+    "obj",
+    "material",
+    "materials",
+    "translate",
+    "rotate",
+    "scale",
+    "dynamic",
+    "motion",
+    "keyframes",
+    "normal_maps",
+];
 pub(crate) const MOTION_KEYS: &[&str] = &["axis", "pivot", "degrees_per_second", "velocity", "amplitude", "period"];
 pub(crate) const KEYFRAME_KEYS: &[&str] = &["time", "translate", "rotate", "scale"];
 pub(crate) const LIGHT_KEYS: &[&str] = &[
@@ -886,7 +897,10 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         return Err(ctx.invalid("render.shadow_cascades", format!("{} is not in 0..=4", r.shadow_cascades)));
     }
     if !(1..=4).contains(&r.supersample) {
-        return Err(ctx.invalid("render.supersample", format!("{} is not in 1..=4 (samples per pixel: its square)", r.supersample)));
+        return Err(ctx.invalid(
+            "render.supersample",
+            format!("{} is not in 1..=4 (samples per pixel: its square)", r.supersample),
+        ));
     }
     if r.width.max(r.height) * r.supersample > 16384 {
         return Err(ctx.invalid(
@@ -1164,7 +1178,18 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         lights.push(l);
     }
 
-    Ok(Scene { path: path.to_path_buf(), name, meshes, objects, materials, textures: textures.textures, camera, lights, settings, bounds })
+    Ok(Scene {
+        path: path.to_path_buf(),
+        name,
+        meshes,
+        objects,
+        materials,
+        textures: textures.textures,
+        camera,
+        lights,
+        settings,
+        bounds,
+    })
 }
 
 fn light(ctx: &Ctx, i: usize, l: &LightDef) -> Result<Light, SceneError> {

@@ -10,9 +10,9 @@ mod obj;
 mod preset;
 pub use preset::Preset;
 mod check;
+pub mod maps;
 mod text;
 mod triangulate;
-pub mod maps;
 
 use std::path::{Path, PathBuf};
 

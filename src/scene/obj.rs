@@ -382,7 +382,13 @@ fn find_relative(dir: &Path, name: &str) -> (Option<PathBuf>, Vec<PathBuf>) {
 
 /// The file name and `-bm` value of a texture statement. Options (`-s 1 1 1`, `-bm 0.5`,
 /// `-clamp on` ...) come before the file name, which may contain spaces.
-fn map_statement(path: &Path, ln: usize, kw: &str, rest: &str, args: &[&str]) -> Result<(String, Option<f32>), SceneError> {
+fn map_statement(
+    path: &Path,
+    ln: usize,
+    kw: &str,
+    rest: &str,
+    args: &[&str],
+) -> Result<(String, Option<f32>), SceneError> {
     let mut bm = None;
     let mut i = 0;
     while i < args.len() && args[i].starts_with('-') {
@@ -782,7 +788,12 @@ fn finish_normals(
 /// Decodes an image file to RGBA8 in the encoding `kind` asks for (colour stays sRGB-encoded;
 /// normal maps in the DirectX convention, `y_down`, are turned to the OpenGL one).
 /// `referenced_by` names the file (and line) that asked for it.
-pub(crate) fn load_texture(path: &Path, referenced_by: &str, kind: MapKind, y_down: bool) -> Result<Texture, SceneError> {
+pub(crate) fn load_texture(
+    path: &Path,
+    referenced_by: &str,
+    kind: MapKind,
+    y_down: bool,
+) -> Result<Texture, SceneError> {
     let err = |message: String| SceneError::Texture { path: path.to_path_buf(), message };
     super::text::check_regular(path, super::text::MAX_ASSET_BYTES)?;
     let reader = image::ImageReader::open(path)

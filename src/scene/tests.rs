@@ -895,10 +895,19 @@ fn material_maps_load_by_kind() {
     let tex = |i: Option<u32>| &s.textures[i.unwrap() as usize];
     assert_eq!((tex(leaf.mask_texture).usage, tex(leaf.mask_texture).rgba8.clone()), (TextureUse::Mask, vec![200; 4]));
     // The DirectX map is stored in the OpenGL convention: green turned around.
-    assert_eq!((tex(leaf.normal_texture).usage, tex(leaf.normal_texture).rgba8.clone()), (TextureUse::Normal, vec![100, 195, 240, 255]));
-    assert_eq!((tex(wall.normal_texture).usage, tex(wall.normal_texture).rgba8.clone()), (TextureUse::Height, vec![120; 4]));
+    assert_eq!(
+        (tex(leaf.normal_texture).usage, tex(leaf.normal_texture).rgba8.clone()),
+        (TextureUse::Normal, vec![100, 195, 240, 255])
+    );
+    assert_eq!(
+        (tex(wall.normal_texture).usage, tex(wall.normal_texture).rgba8.clone()),
+        (TextureUse::Height, vec![120; 4])
+    );
     assert_eq!((wall.bump_scale, leaf.bump_scale), (0.25, 1.0));
-    assert_eq!(scene("opengl").textures.iter().find(|t| t.usage == TextureUse::Normal).unwrap().rgba8, [100, 60, 240, 255]);
+    assert_eq!(
+        scene("opengl").textures.iter().find(|t| t.usage == TextureUse::Normal).unwrap().rgba8,
+        [100, 60, 240, 255]
+    );
 
     // Scene-file materials: both a normal and a bump map is refused, naming the key.
     let p = write(

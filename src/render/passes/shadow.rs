@@ -58,8 +58,13 @@ impl ShadowPass {
             vk::ShaderStageFlags::VERTEX,
             &[Bind::Storage(&scene.instances), Bind::Storage(&frame.shadow_views)],
         )?;
-        let pipeline =
-            Pipeline::graphics(ctx, "shadow", &depth_only(atlas, shaders::SHADOW_VERT, None, &[0], &[]), &[set.layout], 4)?;
+        let pipeline = Pipeline::graphics(
+            ctx,
+            "shadow",
+            &depth_only(atlas, shaders::SHADOW_VERT, None, &[0], &[]),
+            &[set.layout],
+            4,
+        )?;
         let masked = if scene.draws.iter().any(|d| d.masked) {
             let [materials, textures] = scene.materials.binds();
             let set = DescriptorSet::new(
@@ -75,12 +80,21 @@ impl ShadowPass {
                 ],
             )?;
             let spec = [(0, scene.materials.texture_count())];
-            let desc = depth_only(atlas, shaders::SHADOW_MASKED_VERT, Some(shaders::SHADOW_MASKED_FRAG), &[0, 2], &spec);
+            let desc =
+                depth_only(atlas, shaders::SHADOW_MASKED_VERT, Some(shaders::SHADOW_MASKED_FRAG), &[0, 2], &spec);
             Some((Pipeline::graphics(ctx, "shadow (masked)", &desc, &[set.layout], 4)?, set))
         } else {
             None
         };
-        Ok(ShadowPass { atlas: atlas.clone(), scene: scene.clone(), frame: frame.clone(), pipeline, set, masked, views })
+        Ok(ShadowPass {
+            atlas: atlas.clone(),
+            scene: scene.clone(),
+            frame: frame.clone(),
+            pipeline,
+            set,
+            masked,
+            views,
+        })
     }
 }
 
