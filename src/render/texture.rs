@@ -206,7 +206,7 @@ mod tests {
         let src: Vec<u8> = (0..256u32 * 256)
             .flat_map(|i| {
                 let (x, y, bit) = (i % 256, i / 256, (i.wrapping_mul(2_654_435_761) >> 24) as u8 % 2);
-                [((x + y) / 2) as u8 + bit, (x / 4 + 64) as u8 + bit, (y / 4 + 100) as u8 + bit, 255]
+                [((x + y) / 2).min(254) as u8 + bit, (x / 4 + 64) as u8 + bit, (y / 4 + 100) as u8 + bit, 255]
             })
             .collect();
         let mean = |l: &MipLevel, c: usize| {
