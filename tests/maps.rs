@@ -29,17 +29,7 @@ fn quad(name: &str, p: [Vec3; 4], uv: [Vec2; 4], normal: Vec3, material: u32) ->
 }
 
 fn material(name: &str, albedo: Vec3) -> Material {
-    Material {
-        name: name.into(),
-        albedo,
-        albedo_texture: None,
-        mask_texture: None,
-        normal_texture: None,
-        bump_scale: 1.0,
-        specular: Vec3::ZERO,
-        shininess: 1.0,
-        emission: Vec3::ZERO,
-    }
+    Material::diffuse(name, albedo)
 }
 
 fn texture(name: &str, size: u32, usage: TextureUse, texel: impl Fn(u32, u32) -> [u8; 4]) -> Texture {

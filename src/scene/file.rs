@@ -810,17 +810,7 @@ impl TextureSet {
 }
 
 fn default_material() -> Material {
-    Material {
-        name: "default".to_owned(),
-        albedo: Vec3::splat(0.8),
-        albedo_texture: None,
-        mask_texture: None,
-        normal_texture: None,
-        bump_scale: 1.0,
-        specular: Vec3::ZERO,
-        shininess: 1.0,
-        emission: Vec3::ZERO,
-    }
+    Material::diffuse("default", Vec3::splat(0.8))
 }
 
 /// Validates `file` and loads everything it refers to.

@@ -195,6 +195,21 @@ pub struct Material {
 }
 
 impl Material {
+    /// A plain Lambertian material: no textures, no specular, no emission.
+    pub fn diffuse(name: &str, albedo: Vec3) -> Material {
+        Material {
+            name: name.to_owned(),
+            albedo,
+            albedo_texture: None,
+            mask_texture: None,
+            normal_texture: None,
+            bump_scale: 1.0,
+            specular: Vec3::ZERO,
+            shininess: 1.0,
+            emission: Vec3::ZERO,
+        }
+    }
+
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
     }
