@@ -10,9 +10,8 @@ use dvsgi::metrics::LinearImage;
 use dvsgi::reference::{PathTracer, ReferenceOptions};
 use dvsgi::regions::{region_stats, Grouping, Pair, RegionMap, RegionStats};
 use dvsgi::render::{FrameOutput, Renderer};
-use dvsgi::scene::{Aabb, Camera, Material, Motion, Object, RenderSettings, Scene};
-use glam::{Mat4, Vec3};
-use std::path::PathBuf;
+use dvsgi::scene::{Aabb, Camera, Material, Motion, Scene};
+use glam::Vec3;
 
 /// The cached Cornell references: 64x64 at 4096 spp (full and direct light only), traced with
 /// `dvsgi reference scenes/cornell-box.toml --width 64 --height 64 --spp 4096 --out
@@ -194,39 +193,6 @@ fn flat_faces_have_no_stripes() {
     assert!(got <= 1.25 * want, "stripes: variation {got:.4} vs the reference's {want:.4}");
 }
 
-/// A scene of the given triangles (one object per material index), lights and camera.
-fn scene_of(
-    meshes: Vec<dvsgi::scene::Mesh>,
-    materials: Vec<Material>,
-    camera: Camera,
-    lights: Vec<dvsgi::scene::Light>,
-    bounds: Aabb,
-) -> Scene {
-    let objects = (0..meshes.len())
-        .map(|i| Object {
-            name: format!("o{i}"),
-            meshes: vec![i as u32],
-            transform: Mat4::IDENTITY,
-            dynamic: false,
-            motion: Motion::None,
-        })
-        .collect();
-    let mut settings = RenderSettings { width: 32, height: 32, ..Default::default() };
-    settings.gi.voxel_resolution = 32;
-    Scene {
-        path: PathBuf::from("test"),
-        name: "test".into(),
-        meshes,
-        objects,
-        materials,
-        textures: vec![],
-        camera,
-        lights,
-        settings,
-        bounds: Some(bounds),
-    }
-}
-
 fn material(name: &str, albedo: f32, emission: Vec3) -> Material {
     Material {
         name: name.into(),
@@ -238,17 +204,6 @@ fn material(name: &str, albedo: f32, emission: Vec3) -> Material {
         specular: Vec3::ZERO,
         shininess: 1.0,
         emission,
-    }
-}
-
-/// Two triangles covering the axis-aligned square at `c` spanning `u` and `v` (half sizes),
-/// facing `n`.
-fn quad(c: Vec3, u: Vec3, v: Vec3, n: Vec3) -> [[Vec3; 3]; 2] {
-    let (a, b, cc, d) = (c - u - v, c + u - v, c + u + v, c - u + v);
-    if (b - a).cross(cc - a).dot(n) > 0.0 {
-        [[a, b, cc], [a, cc, d]]
-    } else {
-        [[a, cc, b], [a, d, cc]]
     }
 }
 

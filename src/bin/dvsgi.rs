@@ -88,7 +88,7 @@ enum Command {
         /// (overrides render.view).
         #[arg(long)]
         view: Option<String>,
-        /// Global illumination: none | vct (overrides gi.mode).
+        /// Global illumination: none | vct | rsm (overrides gi.mode).
         #[arg(long)]
         gi: Option<String>,
         /// Queue schedule: sync | async | async-lagged (async-lagged needs earlier frames:

@@ -7,6 +7,7 @@ use super::passes::gi_trace::{GiPlaceholders, GiTargets, GiTracePass, GiUpsample
 use super::passes::lighting::{GiInputs, LightingOutput, LightingPass};
 use super::passes::readback::ReadbackPasses;
 use super::passes::resolve::ResolvePass;
+use super::passes::rsm::{RsmGatherPass, RsmMaps, RsmPass};
 use super::passes::shadow::ShadowPass;
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::upload::UploadPass;
@@ -20,7 +21,7 @@ use super::passes::voxelize::{VoxelizePass, Voxelizer};
 use super::scene_gpu::SceneGpu;
 use super::voxel::VoxelVolumes;
 use super::FrameBuffers;
-use crate::gpu::{Context, GpuResult, Image, ImageDesc};
+use crate::gpu::{Buffer, Context, GpuResult, Image, ImageDesc};
 use crate::scene::{DirectShadows, GiMode, Scene, View, VoxelOcclusion};
 use ash::vk;
 use std::sync::Arc;
@@ -68,6 +69,58 @@ pub struct ConePasses {
     pub upsample: Option<GiUpsamplePass>,
 }
 
+/// Reflective shadow maps (`gi.mode = "rsm"`): the maps of every shadowed light, the per-pixel
+/// gather, and the upsample when gathering at reduced resolution.
+pub struct RsmPasses {
+    pub render: RsmPass,
+    pub gather: RsmGatherPass,
+    /// Only with `gi.downsample` > 1.
+    pub upsample: Option<GiUpsamplePass>,
+    /// The downsampling factor for the gather and the upsample (`GiParams`).
+    _params: Buffer,
+}
+
+impl RsmPasses {
+    /// `None` when no light casts shadows: no maps, no indirect light.
+    fn new(
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        scene_gpu: &Arc<SceneGpu>,
+        frame: &FrameBuffers,
+        gbuffer: &Arc<GBuffer>,
+        placeholders: &Arc<GiPlaceholders>,
+    ) -> GpuResult<Option<RsmPasses>> {
+        let views = crate::render::lights::rsm_views(scene);
+        if views.is_empty() {
+            return Ok(None);
+        }
+        let gi = &scene.settings.gi;
+        let maps = Arc::new(RsmMaps::new(ctx, gi.rsm_size, views)?);
+        let params = Buffer::uniform(ctx, "rsm gi params", &crate::render::cones::GpuGiParams::new(gi, 1, 1.0, 1))?;
+        let (width, height) = scene.settings.internal_size();
+        let k = gi.downsample;
+        let label = if k > 1 { format!(" (rsm, 1/{k})") } else { " (rsm)".to_string() };
+        let low = GiTargets::new(ctx, &label, width.div_ceil(k), height.div_ceil(k), false, false)?;
+        let upsample = if k > 1 {
+            let full = GiTargets::new(ctx, " (rsm)", width, height, false, false)?;
+            Some(GiUpsamplePass::new(ctx, frame, gbuffer, &params, &low, full, placeholders)?)
+        } else {
+            None
+        };
+        Ok(Some(RsmPasses {
+            render: RsmPass::new(ctx, scene_gpu, frame, &maps)?,
+            gather: RsmGatherPass::new(ctx, frame, gbuffer, &maps, &params, low, gi.rsm_samples, gi.rsm_radius)?,
+            upsample,
+            _params: params,
+        }))
+    }
+
+    /// The gathered light at full resolution.
+    pub fn targets(&self) -> &GiTargets {
+        self.upsample.as_ref().map_or(&self.gather.targets, |u| &u.targets)
+    }
+}
+
 /// How the frame shades pixels.
 pub enum Shading {
     Lighting(LightingPass),
@@ -85,6 +138,8 @@ pub struct FramePasses {
     pub gbuffer: GBufferPass,
     /// Only when the shading uses cone-traced light.
     pub cones: Option<ConePasses>,
+    /// Only with `gi.mode = "rsm"` and some light that casts shadows.
+    pub rsm: Option<RsmPasses>,
     pub shading: Shading,
     /// Only with `render.supersample` > 1: radiance samples to output pixels.
     pub resolve: Option<ResolvePass>,
@@ -217,7 +272,7 @@ impl FramePasses {
                 let low = GiTargets::new(ctx, &label, lw, lh, specular, cone_shadows)?;
                 let upsample = if k > 1 {
                     let full = GiTargets::new(ctx, "", width, height, specular, cone_shadows)?;
-                    Some(GiUpsamplePass::new(ctx, frame, &gbuffer, &v.volumes, &low, full, &placeholders)?)
+                    Some(GiUpsamplePass::new(ctx, frame, &gbuffer, &v.volumes.gi_params, &low, full, &placeholders)?)
                 } else {
                     None
                 };
@@ -227,6 +282,11 @@ impl FramePasses {
                 })
             }
             _ => None,
+        };
+        let rsm = if s.gi.mode == GiMode::Rsm && !voxel_view {
+            RsmPasses::new(ctx, scene, scene_gpu, frame, &gbuffer, &placeholders)?
+        } else {
+            None
         };
         let shading = match (&voxels, s.view) {
             (Some(v), View::VoxelMip) => Shading::MipView(VoxelMipViewPass::new(
@@ -241,10 +301,11 @@ impl FramePasses {
                 Shading::VoxelView(VoxelViewPass::new(ctx, frame, &v.volumes, s.view, &radiance)?)
             }
             _ => {
-                let gi = cones.as_ref().map(|c| GiInputs {
+                let cone_inputs = cones.as_ref().map(|c| GiInputs {
                     targets: c.upsample.as_ref().map(|u| &u.targets).unwrap_or(&c.trace.targets),
                     cone_shadows: c.trace.targets.shadow.is_some(),
                 });
+                let gi = cone_inputs.or(rsm.as_ref().map(|r| GiInputs { targets: r.targets(), cone_shadows: false }));
                 let output = match s.view {
                     View::Indirect => LightingOutput::IndirectOnly,
                     View::Ao => LightingOutput::AmbientOcclusion,
@@ -276,6 +337,7 @@ impl FramePasses {
             shadow,
             gbuffer: GBufferPass::new(ctx, scene_gpu, frame, &gbuffer)?,
             cones,
+            rsm,
             shading,
             tonemap: TonemapPass::new(ctx, frame, &shown, &display)?,
             resolve,
@@ -305,6 +367,11 @@ impl FramePasses {
         if let Some(c) = &self.cones {
             out.extend(c.trace.targets.all());
             out.extend(c.upsample.iter().flat_map(|u| u.targets.all()));
+        }
+        if let Some(r) = &self.rsm {
+            out.extend(r.render.maps.all());
+            out.extend(r.gather.targets.all());
+            out.extend(r.upsample.iter().flat_map(|u| u.targets.all()));
         }
         out
     }
@@ -350,6 +417,9 @@ impl FramePasses {
                 passes.push(shadow);
             }
         }
+        if let Some(r) = &self.rsm {
+            passes.push(&r.render);
+        }
         // The voxel illumination chain: direct light, mips, bounces (each with its mips).
         let mut voxel_lighting: Vec<&dyn Pass> = Vec::new();
         if let (true, Some(v)) = (relight, &self.voxels) {
@@ -380,6 +450,12 @@ impl FramePasses {
                 if let Some(c) = &self.cones {
                     passes.push(&c.trace);
                     if let Some(up) = &c.upsample {
+                        passes.push(up);
+                    }
+                }
+                if let Some(r) = &self.rsm {
+                    passes.push(&r.gather);
+                    if let Some(up) = &r.upsample {
                         passes.push(up);
                     }
                 }

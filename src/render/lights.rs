@@ -57,18 +57,39 @@ pub fn radiance_scale(scene: &Scene) -> f32 {
     2f32.powi((-typical.log2().round() as i32).clamp(-100, 100))
 }
 
-/// Number of shadow views each light of the scene needs (independent of time).
+/// Shadow views of one light: none without shadows, a directional light's cascades and its
+/// whole-scene view, a spot light's one view, a point light's six cube faces.
+fn views_of(scene: &Scene, light: &crate::scene::Light) -> u32 {
+    match (light.cast_shadows, &light.kind) {
+        (false, _) => 0,
+        (true, LightKind::Point { .. }) => 6,
+        (true, LightKind::Directional { .. }) => scene.settings.shadow_cascades + 1,
+        (true, LightKind::Spot { .. }) => 1,
+    }
+}
+
+/// Number of shadow views the scene's lights need (independent of time).
 pub fn shadow_view_count(scene: &Scene) -> u32 {
-    scene
-        .lights
-        .iter()
-        .filter(|l| l.cast_shadows)
-        .map(|l| match l.kind {
-            LightKind::Point { .. } => 6,
-            LightKind::Directional { .. } => scene.settings.shadow_cascades + 1,
-            LightKind::Spot { .. } => 1,
-        })
-        .sum()
+    scene.lights.iter().map(|l| views_of(scene, l)).sum()
+}
+
+/// The views that reflective shadow maps are rendered from, as `[shadow view, light, 0, 0]`
+/// (`RsmView` in glsl/include/rsm.glsl): a directional light's whole-scene view (the cascades
+/// see only the camera's slices), a spot light's view, a point light's six faces. Lights that
+/// cast no shadows have no shadow view and get no map.
+pub fn rsm_views(scene: &Scene) -> Vec<[u32; 4]> {
+    let mut out = Vec::new();
+    let mut base = 0;
+    for (i, light) in scene.lights.iter().enumerate() {
+        let n = views_of(scene, light);
+        let own = match light.kind {
+            LightKind::Directional { .. } if n > 0 => base + n - 1..base + n,
+            _ => base..base + n,
+        };
+        out.extend(own.map(|v| [v, i as u32, 0, 0]));
+        base += n;
+    }
+    out
 }
 
 /// Weight of the logarithmic split in the cascades' split distances (the "practical split

@@ -349,6 +349,9 @@ pub(crate) const GI_KEYS: &[&str] = &[
     "start_offset",
     "downsample",
     "update_interval",
+    "rsm_size",
+    "rsm_samples",
+    "rsm_radius",
 ];
 pub(crate) const SCENE_KEYS: &[&str] = &["name", "search_paths", "bounds"];
 pub(crate) const BOUNDS_KEYS: &[&str] = &["min", "max"];

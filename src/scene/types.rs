@@ -334,6 +334,10 @@ pub enum GiMode {
     None,
     /// Voxel cone tracing.
     Vct,
+    /// Reflective shadow maps (Dachsbacher & Stamminger 2005): one diffuse bounce gathered per
+    /// pixel from the texels of each shadowed light's flux, normal and position maps; no
+    /// visibility between the texel and the pixel.
+    Rsm,
 }
 
 /// What the frame shows (`--view`): the final image or a debug view.
@@ -476,6 +480,13 @@ pub struct GiSettings {
     pub downsample: u32,
     /// Revoxelize dynamic objects every N frames; 0 = only on demand (`Renderer::request_voxel_update`).
     pub update_interval: u32,
+    /// `mode = "rsm"`: side of each reflective shadow map in texels (a power of two in 16..=2048).
+    pub rsm_size: u32,
+    /// `mode = "rsm"`: RSM texels gathered per pixel and light view (1..=4096).
+    pub rsm_samples: u32,
+    /// `mode = "rsm"`: radius of the gathered disc around the pixel's position in the map, as a
+    /// fraction of the map's side (0 < r <= 2; 0.71 reaches every texel from the map's centre).
+    pub rsm_radius: f32,
 }
 
 impl Default for GiSettings {
@@ -504,6 +515,9 @@ impl Default for GiSettings {
             start_offset: 0.0,
             downsample: 1,
             update_interval: 1,
+            rsm_size: 256,
+            rsm_samples: 128,
+            rsm_radius: 0.25,
         }
     }
 }
@@ -568,6 +582,21 @@ impl GiSettings {
         }
         if !(1..=8).contains(&self.downsample) {
             return Err(("downsample", format!("{} is not in 1..=8", self.downsample)));
+        }
+        self.validate_rsm()
+    }
+
+    fn validate_rsm(&self) -> Result<(), (&'static str, String)> {
+        let size = self.rsm_size;
+        if !(16..=2048).contains(&size) || !size.is_power_of_two() {
+            return Err(("rsm_size", format!("{size} is not a power of two in 16..=2048")));
+        }
+        if !(1..=4096).contains(&self.rsm_samples) {
+            return Err(("rsm_samples", format!("{} is not in 1..=4096", self.rsm_samples)));
+        }
+        let r = self.rsm_radius;
+        if !(r.is_finite() && r > 0.0 && r <= 2.0) {
+            return Err(("rsm_radius", format!("{r} is not in (0, 2] (a fraction of the map's side)")));
         }
         Ok(())
     }

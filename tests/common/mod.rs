@@ -230,3 +230,47 @@ pub fn project(scene: &Scene, p: Vec3) -> (u32, u32) {
     let ndc = c.truncate() / c.w;
     (((ndc.x * 0.5 + 0.5) * w).floor() as u32, ((ndc.y * 0.5 + 0.5) * h).floor() as u32)
 }
+
+/// A scene of the given triangles (one object per material index), lights and camera.
+pub fn scene_of(
+    meshes: Vec<dvsgi::scene::Mesh>,
+    materials: Vec<dvsgi::scene::Material>,
+    camera: dvsgi::scene::Camera,
+    lights: Vec<dvsgi::scene::Light>,
+    bounds: dvsgi::scene::Aabb,
+) -> Scene {
+    let objects = (0..meshes.len())
+        .map(|i| dvsgi::scene::Object {
+            name: format!("o{i}"),
+            meshes: vec![i as u32],
+            transform: glam::Mat4::IDENTITY,
+            dynamic: false,
+            motion: dvsgi::scene::Motion::None,
+        })
+        .collect();
+    let mut settings = dvsgi::scene::RenderSettings { width: 32, height: 32, ..Default::default() };
+    settings.gi.voxel_resolution = 32;
+    Scene {
+        path: PathBuf::from("test"),
+        name: "test".into(),
+        meshes,
+        objects,
+        materials,
+        textures: vec![],
+        camera,
+        lights,
+        settings,
+        bounds: Some(bounds),
+    }
+}
+
+/// Two triangles covering the axis-aligned square at `c` spanning `u` and `v` (half sizes),
+/// facing `n`.
+pub fn quad(c: Vec3, u: Vec3, v: Vec3, n: Vec3) -> [[Vec3; 3]; 2] {
+    let (a, b, cc, d) = (c - u - v, c + u - v, c + u + v, c - u + v);
+    if (b - a).cross(cc - a).dot(n) > 0.0 {
+        [[a, b, cc], [a, cc, d]]
+    } else {
+        [[a, cc, b], [a, d, cc]]
+    }
+}

@@ -2,7 +2,9 @@
 //! normal-aware upsample to full resolution (only when k > 1).
 
 use super::gbuffer::GBuffer;
-use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, ImageDesc, Pipeline, Sampler};
+use crate::gpu::{
+    shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuResult, Image, ImageDesc, Pipeline, Sampler,
+};
 use crate::render::graph::{Pass, QueueKind, Use};
 use crate::render::voxel::VoxelVolumes;
 use crate::render::FrameBuffers;
@@ -198,7 +200,7 @@ impl GiUpsamplePass {
         ctx: &Arc<Context>,
         frame: &FrameBuffers,
         gbuffer: &Arc<GBuffer>,
-        volumes: &VoxelVolumes,
+        gi_params: &Buffer,
         low: &GiTargets,
         targets: GiTargets,
         placeholders: &Arc<GiPlaceholders>,
@@ -213,7 +215,7 @@ impl GiUpsamplePass {
             vk::ShaderStageFlags::COMPUTE,
             &[
                 Bind::Uniform(&frame.uniforms),
-                Bind::Uniform(&volumes.gi_params),
+                Bind::Uniform(gi_params),
                 Bind::Sampled(gbuffer.depth.view, sampler.raw, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL),
                 Bind::Sampled(gbuffer.normal.view, sampler.raw, ro),
                 ld,

@@ -5,6 +5,7 @@ pub mod gi_trace;
 pub mod lighting;
 pub mod readback;
 pub mod resolve;
+pub mod rsm;
 pub mod shadow;
 pub mod tonemap;
 pub mod upload;

@@ -1,0 +1,238 @@
+//! Reflective shadow maps (`gi.mode = "rsm"`) on the real device (lavapipe in CI, validation
+//! on): one bounce from a lit wall onto a floor against the path tracer's one-bounce light for
+//! each kind of light, colour bleeding in the Cornell box, black without light, nothing
+//! created for lights that cast no shadows, finite everywhere, the same image in every schedule.
+
+mod common;
+
+use common::*;
+use dvsgi::reference::{PathTracer, ReferenceOptions};
+use dvsgi::render::{FrameOutput, Mode, RenderOptions, Renderer};
+use dvsgi::scene::{Aabb, Camera, GiMode, Light, LightKind, Material, Motion, Scene, View};
+use glam::Vec3;
+
+const SIZE: u32 = 48;
+
+/// A white wall (z = 0, facing +z, 2 m square) standing on a white floor (y = 0, reaching 2 m
+/// towards +z), lit by `light`, seen from above the floor.
+fn wall_and_floor(light: LightKind) -> Scene {
+    let wall = quad(Vec3::new(0.0, 1.0, 0.0), Vec3::X, Vec3::Y, Vec3::Z);
+    let floor = quad(Vec3::new(0.0, 0.0, 1.0), Vec3::X, Vec3::Z, Vec3::Y);
+    let mut s = scene_of(
+        vec![mesh("wall", &wall, 0, None), mesh("floor", &floor, 1, None)],
+        vec![Material::diffuse("wall", Vec3::splat(0.8)), Material::diffuse("floor", Vec3::splat(0.8))],
+        Camera {
+            position: Vec3::new(0.0, 1.6, 2.8),
+            target: Vec3::new(0.0, 0.0, 1.0),
+            up: Vec3::Y,
+            fov_y_deg: 45.0,
+            near: 0.01,
+            far: 10.0,
+        },
+        vec![Light { name: "light".into(), kind: light, cast_shadows: true, motion: Motion::None }],
+        Aabb { min: Vec3::new(-1.1, -0.1, -0.1), max: Vec3::new(1.1, 2.1, 2.1) },
+    );
+    s.settings.width = SIZE;
+    s.settings.height = SIZE;
+    s.settings.gi.mode = GiMode::Rsm;
+    // Every texel of every map within reach of every pixel: the gather is then a complete
+    // (stratified) sum over the lit surfaces.
+    s.settings.gi.rsm_radius = 1.42;
+    s.settings.gi.rsm_samples = 1024;
+    s
+}
+
+/// The path tracer's radiance (RGB per pixel) with at most `bounces` indirect bounces.
+fn reference(ctx: &std::sync::Arc<dvsgi::gpu::Context>, scene: &Scene, bounces: u32) -> Vec<f32> {
+    let options = ReferenceOptions { spp: 512, max_bounces: Some(bounces), ..Default::default() };
+    let mut pt = PathTracer::new(ctx, scene, options).unwrap();
+    pt.run(|_, _| {}).unwrap();
+    pt.image().unwrap().mean
+}
+
+/// Pixels that see the floor within `r` of its centre (0, 0, 1).
+fn floor_centre(scene: &Scene, r: f32) -> Vec<usize> {
+    let tris = triangles(scene, 0.0);
+    (0..SIZE * SIZE)
+        .filter(|&i| {
+            let (o, d) = camera_ray(scene, i % SIZE, i / SIZE);
+            raycast(&tris, o, d, 1e-4, 1e4).is_some_and(|(t, _)| {
+                let p = o + d * t;
+                p.y.abs() < 1e-3 && (p - Vec3::new(0.0, 0.0, 1.0)).length() < r
+            })
+        })
+        .map(|i| i as usize)
+        .collect()
+}
+
+/// A lit wall facing a white floor: the floor's indirect light at its centre is within 10% of
+/// the path tracer's one-bounce indirect light (bounces 1 minus bounces 0) for a sun (the
+/// whole-scene orthographic map), a spot light (one perspective map) and a point light (six
+/// cube faces, each surface in one of them).
+#[test]
+fn a_lit_wall_lights_the_floor_as_the_reference_does() {
+    let ctx = context();
+    let lights = [
+        ("sun", LightKind::Directional { direction: Vec3::NEG_Z, irradiance: Vec3::splat(3.0) }),
+        (
+            "spot",
+            LightKind::Spot {
+                position: Vec3::new(0.0, 1.2, 1.5),
+                direction: Vec3::new(0.0, -0.1, -1.0),
+                intensity: Vec3::splat(4.0),
+                inner_deg: 30.0,
+                outer_deg: 40.0,
+            },
+        ),
+        ("point", LightKind::Point { position: Vec3::new(0.0, 1.2, 1.2), intensity: Vec3::splat(2.0) }),
+    ];
+    for (name, light) in lights {
+        let scene = wall_and_floor(light);
+        let patch = floor_centre(&scene, 0.2);
+        assert!(patch.len() > 20, "{name}: only {} pixels on the floor's centre", patch.len());
+        let one = reference(&ctx, &scene, 1);
+        let direct = reference(&ctx, &scene, 0);
+        let truth: f64 =
+            patch.iter().map(|&i| (0..3).map(|c| (one[3 * i + c] - direct[3 * i + c]) as f64).sum::<f64>()).sum();
+        let mut s = scene.clone();
+        s.settings.view = View::Indirect;
+        let (indirect, _) = render(&ctx, s);
+        let rsm: f64 = patch.iter().map(|&i| (0..3).map(|c| indirect.radiance[4 * i + c] as f64).sum::<f64>()).sum();
+        let ratio = rsm / truth;
+        eprintln!("{name}: floor centre indirect RSM / reference = {ratio:.4} ({} px)", patch.len());
+        assert!(truth > 0.0, "{name}: the reference has no indirect light on the floor");
+        assert!((ratio - 1.0).abs() < 0.10, "{name}: RSM / reference one-bounce light = {ratio:.4}");
+    }
+}
+
+fn cornell(overrides: &[(&str, &str)]) -> Scene {
+    let mut all = vec![("render.width", "64"), ("render.height", "64"), ("gi.mode", "\"rsm\"")];
+    all.extend_from_slice(overrides);
+    load(&repo().join("scenes/cornell-box.toml"), &all)
+}
+
+/// White surfaces within 15 cm of the red (left) wall are redder with RSM light than with
+/// direct light only, and those near the green wall greener (as tests/gi.rs asks of cones).
+#[test]
+fn rsm_bleeds_colour_onto_white_surfaces_near_the_coloured_walls() {
+    let ctx = context();
+    let (direct, scene) = render(&ctx, cornell(&[("gi.mode", "\"none\"")]));
+    let (gi, _) = render(&ctx, cornell(&[]));
+    let tris = triangles(&scene, 0.0);
+    let near = |i: usize, wall_x: f32| {
+        let (o, d) = camera_ray(&scene, i as u32 % 64, i as u32 / 64);
+        raycast(&tris, o, d, 1e-4, 1e4).is_some_and(|(t, k)| {
+            scene.materials[tris[k].material as usize].name == "white" && ((o + d * t).x - wall_x).abs() < 0.15
+        })
+    };
+    let (d_red, n) = sum_where(&direct, |i| near(i, 0.55));
+    let (g_red, _) = sum_where(&gi, |i| near(i, 0.55));
+    assert!(n > 50, "only {n} white pixels near the red wall");
+    let (d_green, _) = sum_where(&direct, |i| near(i, 0.0));
+    let (g_green, _) = sum_where(&gi, |i| near(i, 0.0));
+    let red = |v: Vec3| v.x / v.y;
+    let green = |v: Vec3| v.y / v.x;
+    assert!(red(g_red) > 1.05 * red(d_red), "near the red wall R/G: RSM {} vs direct {}", red(g_red), red(d_red));
+    assert!(
+        green(g_green) > 1.05 * green(d_green),
+        "near the green wall G/R: {} vs {}",
+        green(g_green),
+        green(d_green)
+    );
+    assert!(g_red.min_element() > d_red.min_element(), "RSM light only adds light");
+}
+
+/// The RSM images and the gathered light as floats.
+fn rsm_data(r: &mut Renderer) -> Vec<(String, Vec<f32>)> {
+    let images = r.images();
+    let mut out = Vec::new();
+    for img in images.iter().filter(|i| i.name.starts_with("rsm") || i.name.starts_with("gi ")) {
+        if let Some(t) = float_texels(r, img, 0) {
+            out.push((img.name.clone(), t));
+        }
+    }
+    out
+}
+
+/// With zero light everything is black: image, flux maps, gathered light.
+#[test]
+fn no_light_gives_black_everywhere() {
+    let ctx = context();
+    let mut r = Renderer::new(&ctx, cornell(&[("lights.0.intensity", "[0, 0, 0]"), ("gi.downsample", "2")])).unwrap();
+    r.render(0.0, true).unwrap();
+    assert!(r.output().radiance.chunks_exact(4).all(|p| p[..3] == [0.0; 3]), "the image is not black");
+    let data = rsm_data(&mut r);
+    let names: Vec<&str> = data.iter().map(|(n, _)| n.as_str()).collect();
+    for expected in ["rsm flux", "gi diffuse (rsm, 1/2)", "gi diffuse (rsm)"] {
+        assert!(names.contains(&expected), "{expected} not read back: {names:?}");
+    }
+    for (name, texels) in data.iter().filter(|(n, _)| n.starts_with("rsm flux") || n.starts_with("gi diffuse")) {
+        assert!(texels.chunks_exact(4).all(|t| t[..3] == [0.0; 3]), "{name} is not black");
+    }
+    drop(r);
+    assert_no_validation_messages(&ctx);
+}
+
+/// A light that casts no shadows has no shadow view and so no map: no RSM passes run, no RSM
+/// image exists, and there is no indirect light.
+#[test]
+fn lights_without_shadows_get_no_maps() {
+    let ctx = context();
+    let mut r =
+        Renderer::new(&ctx, cornell(&[("lights.0.cast_shadows", "false"), ("render.view", "\"indirect\"")])).unwrap();
+    r.render(0.0, true).unwrap();
+    let names = r.pass_names(false);
+    assert!(!names.iter().any(|n| n.contains("reflective") || n.starts_with("rsm")), "{names:?}");
+    assert!(!r.images().iter().any(|i| i.name.starts_with("rsm")), "an RSM image exists");
+    assert!(r.output().radiance.chunks_exact(4).all(|p| p[..3] == [0.0; 3]), "indirect light without a map");
+    drop(r);
+    assert_no_validation_messages(&ctx);
+}
+
+/// A point light's six faces at half resolution with the upsample: every float of every map,
+/// the gathered light and the image is finite, and the passes ran.
+#[test]
+fn every_rsm_map_and_image_is_finite() {
+    let ctx = context();
+    let mut r = Renderer::new(&ctx, cornell(&[("gi.downsample", "2"), ("gi.rsm_size", "64")])).unwrap();
+    r.render(0.0, true).unwrap();
+    let names = r.pass_names(false);
+    for p in ["reflective shadow maps", "rsm gather", "gi upsample"] {
+        assert!(names.iter().any(|n| n == p), "{p} missing from {names:?}");
+    }
+    let out: FrameOutput = r.output();
+    assert!(out.radiance.iter().all(|v| v.is_finite()), "image has NaN/Inf");
+    let data = rsm_data(&mut r);
+    assert!(data.len() >= 4, "maps and targets read back: {}", data.len());
+    for (name, texels) in data {
+        assert!(texels.iter().all(|v| v.is_finite()), "{name} has NaN/Inf");
+    }
+    drop(r);
+    assert_no_validation_messages(&ctx);
+}
+
+/// sync, async and async-lagged render the same RSM image, bit for bit, and the async modes
+/// put the gather on the compute stream.
+#[test]
+fn every_mode_renders_the_same_rsm_image() {
+    let ctx = context();
+    let s = cornell(&[("gi.downsample", "2"), ("gi.rsm_size", "64")]);
+    let mut r = Renderer::with_options(&ctx, s, RenderOptions { mode: Mode::Sync, frames_in_flight: 2 }).unwrap();
+    r.render(0.0, true).unwrap();
+    let sync = r.output().radiance;
+    assert!(sync.iter().any(|v| *v > 0.0));
+    for mode in [Mode::Async, Mode::AsyncLagged, Mode::Sync, Mode::Async] {
+        r.set_mode(mode);
+        r.render(0.0, true).unwrap();
+        let out = r.output().radiance;
+        let differing = sync.iter().zip(&out).filter(|(a, b)| a != b).count();
+        assert_eq!(differing, 0, "{mode}: {differing} values differ from sync");
+        if mode != Mode::Sync {
+            let queues: Vec<_> = r.scheduler().submits().iter().map(|s| s.queue).collect();
+            assert!(queues.contains(&dvsgi::render::graph::QueueKind::Compute), "{mode}: {queues:?}");
+        }
+    }
+    r.wait_idle().unwrap();
+    drop(r);
+    assert_no_validation_messages(&ctx);
+}
