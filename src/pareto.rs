@@ -35,6 +35,8 @@ pub struct PlotPoint {
     pub y: f64,
     /// Text drawn next to the point when it is on the front.
     pub label: String,
+    /// The series the point belongs to (a GI technique): each has its own colour.
+    pub group: String,
     /// Whether the point is on the Pareto front (e.g. from [`pareto_front`]).
     pub front: bool,
 }
@@ -57,8 +59,15 @@ pub enum PlotError {
 
 /// Size of the picture in SVG user units (pixels).
 const SIZE: (u32, u32) = (960, 640);
-const FRONT_COLOR: RGBColor = RGBColor(214, 69, 35);
-const DOMINATED_COLOR: RGBColor = RGBColor(150, 150, 150);
+const FRONT_COLOR: RGBColor = RGBColor(40, 40, 40);
+/// One colour per group, in order of first appearance (then repeating).
+const GROUP_COLORS: [RGBColor; 5] = [
+    RGBColor(214, 69, 35),
+    RGBColor(33, 113, 181),
+    RGBColor(35, 139, 69),
+    RGBColor(117, 107, 177),
+    RGBColor(150, 150, 150),
+];
 
 /// Draws a scatter plot of `points` as an SVG file at `path`.
 ///
@@ -153,13 +162,22 @@ where
         .light_line_style(RGBColor(238, 238, 238))
         .draw()?;
 
-    chart
-        .draw_series(
-            spec.points.iter().filter(|p| !p.2.front).map(|p| Circle::new((p.0, p.1), 3, DOMINATED_COLOR.filled())),
-        )?
-        .label("dominated")
-        .legend(|(x, y)| Circle::new((x, y), 3, DOMINATED_COLOR.filled()));
-
+    // Every point in its group's colour: dominated ones small and pale, the front's large.
+    let mut groups: Vec<&str> = Vec::new();
+    for p in spec.points {
+        if !groups.contains(&p.2.group.as_str()) {
+            groups.push(&p.2.group);
+        }
+    }
+    let color = |g: &str| GROUP_COLORS[groups.iter().position(|x| *x == g).unwrap_or(0) % GROUP_COLORS.len()];
+    for g in &groups {
+        let c = color(g);
+        let mine = || spec.points.iter().filter(move |p| p.2.group == *g);
+        chart
+            .draw_series(mine().filter(|p| !p.2.front).map(|p| Circle::new((p.0, p.1), 3, c.mix(0.45).filled())))?
+            .label(if g.is_empty() { "dominated".to_owned() } else { g.to_string() })
+            .legend(move |(x, y)| Circle::new((x, y), 4, c.filled()));
+    }
     let mut front: Vec<(f64, f64, &PlotPoint)> = spec.points.iter().filter(|p| p.2.front).copied().collect();
     front.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
     let mut steps = Vec::with_capacity(front.len() * 2);
@@ -181,11 +199,11 @@ where
             let (dx, h) = if p.0 <= middle { (7, HPos::Left) } else { (-7, HPos::Right) };
             let style = ("sans-serif", 12).into_font().color(&BLACK).pos(Pos::new(h, VPos::Bottom));
             EmptyElement::at((p.0, p.1))
-                + Circle::new((0, 0), 5, FRONT_COLOR.filled())
+                + Circle::new((0, 0), 5, color(&p.2.group).filled())
                 + Text::new(p.2.label.clone(), (dx, -4), style)
         }))?
         .label("Pareto front")
-        .legend(|(x, y)| Circle::new((x, y), 5, FRONT_COLOR.filled()));
+        .legend(|(x, y)| PathElement::new(vec![(x - 6, y), (x + 6, y)], FRONT_COLOR.stroke_width(2)));
 
     chart
         .configure_series_labels()
@@ -279,7 +297,10 @@ mod tests {
             (9.0, 0.0, "reference"),
         ];
         let front = pareto_front(&raw.iter().map(|p| (p.0, p.1)).collect::<Vec<_>>());
-        raw.iter().zip(front).map(|(p, front)| PlotPoint { x: p.0, y: p.1, label: p.2.to_owned(), front }).collect()
+        raw.iter()
+            .zip(front)
+            .map(|(p, front)| PlotPoint { x: p.0, y: p.1, label: p.2.to_owned(), group: String::new(), front })
+            .collect()
     }
 
     fn check_svg(text: &str, points: &[PlotPoint], title: &str) {
@@ -321,8 +342,8 @@ mod tests {
         let path = dir.path().join("empty.svg");
         frontier_svg(&path, "nothing", "x", "y", &[], true, true).unwrap();
         check_svg(&std::fs::read_to_string(&path).unwrap(), &[], "nothing");
-        let one = [PlotPoint { x: 3.0, y: 0.0, label: "only".into(), front: true }];
-        let nan = PlotPoint { x: f64::NAN, y: 1.0, label: "nan".into(), front: false };
+        let one = [PlotPoint { x: 3.0, y: 0.0, label: "only".into(), group: String::new(), front: true }];
+        let nan = PlotPoint { x: f64::NAN, y: 1.0, label: "nan".into(), group: String::new(), front: false };
         for log_y in [false, true] {
             frontier_svg(&path, "one", "x", "y", &[one[0].clone(), nan.clone()], log_y, log_y).unwrap();
             check_svg(&std::fs::read_to_string(&path).unwrap(), &one, "one");

@@ -49,10 +49,30 @@ pub enum Param {
     BounceCones,
     /// `gi.bounce_interleave`: one in N static voxels gathers the bounce per update.
     BounceInterleave,
+    /// `gi.mode`, the technique: values are names (`--grid mode=vct,rsm`), held as their
+    /// index in [`TECHNIQUES`].
+    Mode,
+    /// `gi.rsm_samples`.
+    RsmSamples,
+    /// `gi.rsm_radius` (a fraction of the map's side).
+    RsmRadius,
+    /// `gi.rsm_size` (texels per side).
+    RsmSize,
+}
+
+/// The `gi.mode` values a sweep can compare, in the order of their index as a knob value.
+pub const TECHNIQUES: [&str; 3] = ["none", "vct", "rsm"];
+
+fn technique_index(mode: &str) -> f64 {
+    TECHNIQUES.iter().position(|t| *t == mode).map_or(f64::NAN, |i| i as f64)
+}
+
+fn vct() -> String {
+    "vct".to_owned()
 }
 
 impl Param {
-    pub const ALL: [Param; 9] = [
+    pub const ALL: [Param; 13] = [
         Param::VoxelResolution,
         Param::DiffuseCones,
         Param::DiffuseConeAngle,
@@ -62,6 +82,10 @@ impl Param {
         Param::Ao,
         Param::BounceCones,
         Param::BounceInterleave,
+        Param::Mode,
+        Param::RsmSamples,
+        Param::RsmRadius,
+        Param::RsmSize,
     ];
     /// The key under `[gi]`.
     pub fn key(self) -> &'static str {
@@ -75,6 +99,10 @@ impl Param {
             Param::Ao => "ao",
             Param::BounceCones => "bounce_cones",
             Param::BounceInterleave => "bounce_interleave",
+            Param::Mode => "mode",
+            Param::RsmSamples => "rsm_samples",
+            Param::RsmRadius => "rsm_radius",
+            Param::RsmSize => "rsm_size",
         }
     }
     /// Short prefix in configuration labels.
@@ -89,10 +117,14 @@ impl Param {
             Param::Ao => "o",
             Param::BounceCones => "bc",
             Param::BounceInterleave => "i",
+            Param::Mode => "",
+            Param::RsmSamples => "n",
+            Param::RsmRadius => "r",
+            Param::RsmSize => "m",
         }
     }
     fn integer(self) -> bool {
-        !matches!(self, Param::DiffuseConeAngle | Param::Step)
+        !matches!(self, Param::DiffuseConeAngle | Param::Step | Param::RsmRadius)
     }
     pub fn from_key(key: &str) -> Option<Param> {
         let key = key.strip_prefix("gi.").unwrap_or(key);
@@ -139,7 +171,15 @@ impl Grid {
             }
             let mut vals = Vec::new();
             for v in values.split(',').map(str::trim).filter(|v| !v.is_empty()) {
-                let x: f64 = v.parse().map_err(|_| bad(format!("{v:?} is not a number")))?;
+                let x: f64 = if param == Param::Mode {
+                    let i = technique_index(v);
+                    if i.is_nan() {
+                        return Err(bad(format!("{v:?} is not a technique; one of {}", TECHNIQUES.join(", "))));
+                    }
+                    i
+                } else {
+                    v.parse().map_err(|_| bad(format!("{v:?} is not a number")))?
+                };
                 if !x.is_finite() || (param.integer() && x.fract() != 0.0) || x < 0.0 || (param == Param::Ao && x > 1.0)
                 {
                     return Err(bad(format!(
@@ -186,22 +226,34 @@ pub struct Config {
 }
 
 impl Config {
-    /// e.g. `v64 c6 a0 s0.5 b1 k1`.
+    /// e.g. `v64 c6 a0 s0.5 b1 k1`; a technique by its name (`rsm n128 r0.5 k2`).
     pub fn label(&self) -> String {
-        self.values.iter().map(|(p, v)| format!("{}{}", p.short(), fmt_value(*v))).collect::<Vec<_>>().join(" ")
+        self.values.iter().map(|(p, v)| format!("{}{}", p.short(), value_text(*p, *v))).collect::<Vec<_>>().join(" ")
     }
     /// As `--set` overrides.
     pub fn overrides(&self) -> Vec<(String, String)> {
         self.values
             .iter()
             .map(|(p, v)| {
-                let value = if *p == Param::Ao { (*v != 0.0).to_string() } else { fmt_value(*v) };
+                let value = match p {
+                    Param::Ao => (*v != 0.0).to_string(),
+                    Param::Mode => format!("{:?}", value_text(*p, *v)),
+                    _ => fmt_value(*v),
+                };
                 (format!("gi.{}", p.key()), value)
             })
             .collect()
     }
     pub fn get(&self, p: Param) -> Option<f64> {
         self.values.iter().find(|(q, _)| *q == p).map(|(_, v)| *v)
+    }
+}
+
+/// A knob value as written: a technique's name, else the number.
+fn value_text(p: Param, v: f64) -> String {
+    match p {
+        Param::Mode => TECHNIQUES.get(v as usize).copied().unwrap_or("?").to_owned(),
+        _ => fmt_value(v),
     }
 }
 
@@ -238,6 +290,16 @@ pub struct Row {
     /// `gi.bounce_interleave`; absent (1) in rows from before it existed.
     #[serde(default = "one")]
     pub bounce_interleave: u32,
+    /// `gi.mode`: the technique ("vct" in rows from before it was recorded).
+    #[serde(default = "vct")]
+    pub mode: String,
+    /// `gi.rsm_samples`, `gi.rsm_radius`, `gi.rsm_size` (0 in rows from before RSM).
+    #[serde(default)]
+    pub rsm_samples: u32,
+    #[serde(default)]
+    pub rsm_radius: f32,
+    #[serde(default)]
+    pub rsm_size: u32,
     /// Median host wall clock of a frame that updates the voxels (relight, mips, bounces)
     /// and traces: the cost when lights or objects move. The front is drawn against this.
     pub frame_ms: f64,
@@ -273,6 +335,10 @@ impl Row {
             ao: s.ao,
             bounce_cones: s.bounce_cones,
             bounce_interleave: s.bounce_interleave,
+            mode: serde_json::to_value(s.mode).ok().and_then(|v| v.as_str().map(str::to_owned)).unwrap_or_else(vct),
+            rsm_samples: s.rsm_samples,
+            rsm_radius: s.rsm_radius,
+            rsm_size: s.rsm_size,
             frame_ms: time[0],
             frame_p95_ms: time[1],
             static_frame_ms: time[2],
@@ -351,6 +417,10 @@ impl Row {
             Param::Ao => self.ao as u32 as f64,
             Param::BounceCones => self.bounce_cones as f64,
             Param::BounceInterleave => self.bounce_interleave as f64,
+            Param::Mode => technique_index(&self.mode),
+            Param::RsmSamples => self.rsm_samples as f64,
+            Param::RsmRadius => self.rsm_radius as f64,
+            Param::RsmSize => self.rsm_size as f64,
         }
     }
 }
@@ -478,6 +548,7 @@ pub fn plot(path: &Path, scene: &str, device: &str, rows: &[Row], metric: (&str,
             x: r.frame_ms,
             y: r.error(name),
             label: r.label.clone(),
+            group: r.mode.clone(),
             front: r.on_front(name),
         })
         .collect();

@@ -1,7 +1,9 @@
-//! Reflective shadow maps (`gi.mode = "rsm"`) on the real device (lavapipe in CI, validation
-//! on): one bounce from a lit wall onto a floor against the path tracer's one-bounce light for
-//! each kind of light, colour bleeding in the Cornell box, black without light, nothing
-//! created for lights that cast no shadows, finite everywhere, the same image in every schedule.
+//! Reflective shadow maps (`gi.mode = "rsm"`) and light propagation volumes (`"lpv"`, built on
+//! them) on the real device (lavapipe in CI, validation on): RSM's one bounce from a lit wall
+//! onto a floor against the path tracer's for each kind of light, colour bleeding in the
+//! Cornell box, black without light, nothing created for lights that cast no shadows; an LPV
+//! propagation step on the GPU against the CPU reference and its energy in an empty grid, no
+//! negative radiance; finite everywhere and the same image in every schedule for both.
 
 mod common;
 
@@ -10,6 +12,7 @@ use dvsgi::reference::{PathTracer, ReferenceOptions};
 use dvsgi::render::{FrameOutput, Mode, RenderOptions, Renderer};
 use dvsgi::scene::{Aabb, Camera, GiMode, Light, LightKind, Material, Motion, Scene, View};
 use glam::Vec3;
+use glam::Vec4;
 
 const SIZE: u32 = 48;
 
@@ -105,6 +108,43 @@ fn a_lit_wall_lights_the_floor_as_the_reference_does() {
     }
 }
 
+/// One LPV propagation step on the GPU equals the CPU reference (`render::lpv::propagate_step`)
+/// applied to the GPU's injected light, and in an empty grid (the lit wall in the middle of
+/// bounds four times its size, so no light reaches the border in one step) it keeps the
+/// injected flux within 0.1%.
+#[test]
+fn an_lpv_step_matches_the_cpu_reference_and_keeps_the_flux() {
+    let ctx = context();
+    let mut scene = wall_and_floor(LightKind::Directional { direction: Vec3::NEG_Z, irradiance: Vec3::splat(3.0) });
+    scene.bounds = Some(Aabb { min: Vec3::splat(-4.0), max: Vec3::splat(4.0) });
+    scene.settings.gi.mode = GiMode::Lpv;
+    scene.settings.gi.lpv_resolution = 16;
+    scene.settings.gi.lpv_steps = 1;
+    scene.settings.gi.lpv_occlusion = false;
+    let mut r = Renderer::new(&ctx, scene).unwrap();
+    r.render(0.0, true).unwrap();
+    let images = r.images();
+    let mut read = |name: &str| -> Vec<Vec4> {
+        let img = images.iter().find(|i| i.name == name).unwrap_or_else(|| panic!("no image {name}"));
+        float_texels(&mut r, img, 0).unwrap().chunks_exact(4).map(Vec4::from_slice).collect()
+    };
+    for colour in ["r", "g", "b"] {
+        let injected = read(&format!("lpv light a {colour}"));
+        let stepped = read(&format!("lpv light b {colour}"));
+        let flux = |g: &[Vec4]| g.iter().map(|v| dvsgi::render::lpv::flux(*v) as f64).sum::<f64>();
+        assert!(flux(&injected) > 0.0, "{colour}: nothing injected");
+        let cpu = dvsgi::render::lpv::propagate_step(&injected, 16);
+        let scale = cpu.iter().map(|v| v.abs().max_element()).fold(0.0f32, f32::max);
+        let worst = cpu.iter().zip(&stepped).map(|(a, b)| (*a - *b).abs().max_element()).fold(0.0f32, f32::max);
+        assert!(worst <= 1e-5 * scale, "{colour}: GPU step differs from the CPU's by {worst} (largest {scale})");
+        let kept = flux(&stepped) / flux(&injected);
+        eprintln!("{colour}: one step keeps {kept:.6} of the injected flux");
+        assert!((kept - 1.0).abs() < 1e-3, "{colour}: one step in an empty grid keeps {kept} of the flux");
+    }
+    drop(r);
+    assert_no_validation_messages(&ctx);
+}
+
 fn cornell(overrides: &[(&str, &str)]) -> Scene {
     let mut all = vec![("render.width", "64"), ("render.height", "64"), ("gi.mode", "\"rsm\"")];
     all.extend_from_slice(overrides);
@@ -146,7 +186,7 @@ fn rsm_bleeds_colour_onto_white_surfaces_near_the_coloured_walls() {
 fn rsm_data(r: &mut Renderer) -> Vec<(String, Vec<f32>)> {
     let images = r.images();
     let mut out = Vec::new();
-    for img in images.iter().filter(|i| i.name.starts_with("rsm") || i.name.starts_with("gi ")) {
+    for img in images.iter().filter(|i| ["rsm", "lpv", "gi "].iter().any(|p| i.name.starts_with(p))) {
         if let Some(t) = float_texels(r, img, 0) {
             out.push((img.name.clone(), t));
         }
@@ -189,35 +229,58 @@ fn lights_without_shadows_get_no_maps() {
     assert_no_validation_messages(&ctx);
 }
 
-/// A point light's six faces at half resolution with the upsample: every float of every map,
-/// the gathered light and the image is finite, and the passes ran.
+/// A point light's six faces at half resolution with the upsample, gathered (RSM) and
+/// propagated with occlusion (LPV): every float of every map, volume, gathered light and the
+/// image is finite, the light the lighting pass reads is never negative (LPV's two-band SH
+/// rings negative behind bright lobes; the lookup clamps), and the passes ran.
 #[test]
-fn every_rsm_map_and_image_is_finite() {
+fn every_map_volume_and_image_is_finite_and_the_light_never_negative() {
     let ctx = context();
-    let mut r = Renderer::new(&ctx, cornell(&[("gi.downsample", "2"), ("gi.rsm_size", "64")])).unwrap();
-    r.render(0.0, true).unwrap();
-    let names = r.pass_names(false);
-    for p in ["reflective shadow maps", "rsm gather", "gi upsample"] {
-        assert!(names.iter().any(|n| n == p), "{p} missing from {names:?}");
+    let passes = [
+        ("rsm", vec!["reflective shadow maps", "rsm gather", "gi upsample"]),
+        ("lpv", vec!["reflective shadow maps", "lpv inject", "lpv propagate", "lpv lookup", "gi upsample"]),
+    ];
+    for (mode, expected) in passes {
+        let m = format!("{mode:?}");
+        let scene =
+            cornell(&[("gi.mode", &m), ("gi.downsample", "2"), ("gi.rsm_size", "64"), ("gi.lpv_resolution", "16")]);
+        let mut r = Renderer::new(&ctx, scene).unwrap();
+        r.render(0.0, true).unwrap();
+        let names = r.pass_names(false);
+        for p in expected {
+            assert!(names.iter().any(|n| n == p), "{mode}: {p} missing from {names:?}");
+        }
+        let out: FrameOutput = r.output();
+        assert!(out.radiance.iter().all(|v| v.is_finite()), "{mode}: image has NaN/Inf");
+        let data = rsm_data(&mut r);
+        assert!(data.len() >= 4, "{mode}: maps and targets read back: {}", data.len());
+        for (name, texels) in &data {
+            assert!(texels.iter().all(|v| v.is_finite()), "{mode}: {name} has NaN/Inf");
+            if name.starts_with("gi diffuse") {
+                assert!(texels.iter().all(|v| *v >= 0.0), "{mode}: {name} has negative light");
+            }
+        }
+        drop(r);
     }
-    let out: FrameOutput = r.output();
-    assert!(out.radiance.iter().all(|v| v.is_finite()), "image has NaN/Inf");
-    let data = rsm_data(&mut r);
-    assert!(data.len() >= 4, "maps and targets read back: {}", data.len());
-    for (name, texels) in data {
-        assert!(texels.iter().all(|v| v.is_finite()), "{name} has NaN/Inf");
-    }
-    drop(r);
     assert_no_validation_messages(&ctx);
 }
 
-/// sync, async and async-lagged render the same RSM image, bit for bit, and the async modes
-/// put the gather on the compute stream.
+/// sync, async and async-lagged render the same RSM and LPV images, bit for bit, and the async
+/// modes put the gather or the volume on the compute stream.
 #[test]
-fn every_mode_renders_the_same_rsm_image() {
+fn every_mode_renders_the_same_rsm_and_lpv_image() {
     let ctx = context();
-    let s = cornell(&[("gi.downsample", "2"), ("gi.rsm_size", "64")]);
-    let mut r = Renderer::with_options(&ctx, s, RenderOptions { mode: Mode::Sync, frames_in_flight: 2 }).unwrap();
+    for mode in ["\"rsm\"", "\"lpv\""] {
+        same_image_in_every_schedule(
+            &ctx,
+            cornell(&[("gi.mode", mode), ("gi.downsample", "2"), ("gi.rsm_size", "64")]),
+        );
+    }
+    assert_no_validation_messages(&ctx);
+}
+
+fn same_image_in_every_schedule(ctx: &std::sync::Arc<dvsgi::gpu::Context>, s: Scene) {
+    let mut r = Renderer::with_options(ctx, s, RenderOptions { mode: Mode::Sync, frames_in_flight: 2 }).unwrap();
     r.render(0.0, true).unwrap();
     let sync = r.output().radiance;
     assert!(sync.iter().any(|v| *v > 0.0));
@@ -233,6 +296,4 @@ fn every_mode_renders_the_same_rsm_image() {
         }
     }
     r.wait_idle().unwrap();
-    drop(r);
-    assert_no_validation_messages(&ctx);
 }

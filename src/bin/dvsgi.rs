@@ -149,7 +149,9 @@ enum Command {
         out: PathBuf,
         /// A knob and its values, e.g. --grid voxel_resolution=32,64,128 (repeatable; knobs:
         /// voxel_resolution, diffuse_cones, diffuse_cone_angle, step, bounces, downsample, ao
-        /// (0 or 1), bounce_cones, bounce_interleave).
+        /// (0 or 1), bounce_cones, bounce_interleave, mode (the technique: none, vct, rsm),
+        /// rsm_samples, rsm_radius, rsm_size). Sweeps with other grids into the same directory
+        /// add their rows to one frontier, e.g. the cone-tracing grid, then --grid mode=rsm ....
         /// Without --grid: the default grid of 216 configurations (ACCURACY.md).
         #[arg(long)]
         grid: Vec<String>,

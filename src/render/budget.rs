@@ -27,7 +27,8 @@ pub struct Estimate {
     pub largest_volume: u64,
     /// G-buffer, radiance, display and cone-tracing targets.
     pub targets: u64,
-    /// Shadow maps.
+    /// Shadow maps, and with `gi.mode = "rsm"` the reflective shadow maps (flux, normal,
+    /// position and depth per light view).
     pub shadow_maps: u64,
     /// Vertex and index buffers and textures.
     pub scene: u64,
@@ -44,6 +45,23 @@ impl Estimate {
         // depth 4 + albedo 4 + normal 8 + specular 4 + emission 8, radiance 16, display 4.
         e.targets = px * (28 + 16 + 4);
         e.shadow_maps = if shadow_views > 0 { 4 * (s.shadow_map_size as u64).pow(2) * shadow_views as u64 } else { 4 };
+        if s.gi.uses_rsm() && !voxel_view {
+            let views = crate::render::lights::rsm_views(scene).len() as u64;
+            if views > 0 {
+                if s.gi.mode == GiMode::Lpv {
+                    // Ten RGBA32F volumes: light ping-pong and sum (3 colours each), geometry.
+                    let lpv = 16 * (s.gi.lpv_resolution as u64).pow(3);
+                    e.volumes += 10 * lpv;
+                    e.largest_volume = e.largest_volume.max(lpv);
+                }
+                // Flux RGBA32F 16 + normal RGBA16F 8 + position RGBA32F 16 + depth 4 per texel.
+                e.shadow_maps += 44 * (s.gi.rsm_size as u64).pow(2) * views;
+                // The gathered light (RGBA16F) at 1/k, and at full resolution when k > 1.
+                let k = s.gi.downsample as u64;
+                let low = (iw as u64).div_ceil(k) * (ih as u64).div_ceil(k);
+                e.targets += 8 * (low + if k > 1 { px } else { 0 });
+            }
+        }
         if s.gi.mode == GiMode::Vct || voxel_view {
             let needs = VoxelNeeds::of(scene);
             let res = s.gi.voxel_resolution as u64;

@@ -1,10 +1,11 @@
 //! The frame: which passes exist for this scene and the order they run in.
 //! This is the one place to read to know what a frame does.
 
-use super::graph::Pass;
+use super::graph::{Pass, QueueKind};
 use super::passes::gbuffer::{GBuffer, GBufferPass};
 use super::passes::gi_trace::{GiPlaceholders, GiTargets, GiTracePass, GiUpsamplePass};
 use super::passes::lighting::{GiInputs, LightingOutput, LightingPass};
+use super::passes::lpv::{LpvInjectPass, LpvLookupPass, LpvPropagatePass, LpvVolumes};
 use super::passes::readback::ReadbackPasses;
 use super::passes::resolve::ResolvePass;
 use super::passes::rsm::{RsmGatherPass, RsmMaps, RsmPass};
@@ -69,14 +70,27 @@ pub struct ConePasses {
     pub upsample: Option<GiUpsamplePass>,
 }
 
-/// Reflective shadow maps (`gi.mode = "rsm"`): the maps of every shadowed light, the per-pixel
-/// gather, and the upsample when gathering at reduced resolution.
+/// The light propagation volume's passes (`gi.mode = "lpv"`).
+pub struct LpvPasses {
+    pub volumes: Arc<LpvVolumes>,
+    pub inject: LpvInjectPass,
+    /// Only with `gi.lpv_steps` > 0.
+    pub propagate: Option<LpvPropagatePass>,
+    pub lookup: LpvLookupPass,
+}
+
+/// The techniques built on reflective shadow maps (`gi.mode = "rsm"` or `"lpv"`): the maps of
+/// every shadowed light, then the per-pixel RSM gather or the light propagation volume, and
+/// the upsample when working at reduced resolution.
 pub struct RsmPasses {
     pub render: RsmPass,
-    pub gather: RsmGatherPass,
+    /// `gi.mode = "rsm"`.
+    pub gather: Option<RsmGatherPass>,
+    /// `gi.mode = "lpv"`.
+    pub lpv: Option<LpvPasses>,
     /// Only with `gi.downsample` > 1.
     pub upsample: Option<GiUpsamplePass>,
-    /// The downsampling factor for the gather and the upsample (`GiParams`).
+    /// The downsampling factor for the gather, the lookup and the upsample (`GiParams`).
     _params: Buffer,
 }
 
@@ -99,25 +113,80 @@ impl RsmPasses {
         let params = Buffer::uniform(ctx, "rsm gi params", &crate::render::cones::GpuGiParams::new(gi, 1, 1.0, 1))?;
         let (width, height) = scene.settings.internal_size();
         let k = gi.downsample;
-        let label = if k > 1 { format!(" (rsm, 1/{k})") } else { " (rsm)".to_string() };
+        let what = if gi.mode == GiMode::Lpv { "lpv" } else { "rsm" };
+        let label = if k > 1 { format!(" ({what}, 1/{k})") } else { format!(" ({what})") };
         let low = GiTargets::new(ctx, &label, width.div_ceil(k), height.div_ceil(k), false, false)?;
         let upsample = if k > 1 {
-            let full = GiTargets::new(ctx, " (rsm)", width, height, false, false)?;
+            let full = GiTargets::new(ctx, &format!(" ({what})"), width, height, false, false)?;
             Some(GiUpsamplePass::new(ctx, frame, gbuffer, &params, &low, full, placeholders)?)
         } else {
             None
         };
+        let (gather, lpv) = if gi.mode == GiMode::Lpv {
+            let q = QueueKind::Compute;
+            let volumes = Arc::new(LpvVolumes::new(ctx, crate::render::lpv::grid(scene), gi.lpv_occlusion)?);
+            let propagate =
+                (gi.lpv_steps > 0).then(|| LpvPropagatePass::new(ctx, &volumes, gi.lpv_steps, q)).transpose()?;
+            let lpv = LpvPasses {
+                inject: LpvInjectPass::new(ctx, frame, &maps, &volumes, q)?,
+                propagate,
+                lookup: LpvLookupPass::new(ctx, frame, gbuffer, &volumes, &params, low, q)?,
+                volumes,
+            };
+            (None, Some(lpv))
+        } else {
+            let gather = RsmGatherPass::new(ctx, frame, gbuffer, &maps, &params, low, gi.rsm_samples, gi.rsm_radius)?;
+            (Some(gather), None)
+        };
         Ok(Some(RsmPasses {
             render: RsmPass::new(ctx, scene_gpu, frame, &maps)?,
-            gather: RsmGatherPass::new(ctx, frame, gbuffer, &maps, &params, low, gi.rsm_samples, gi.rsm_radius)?,
+            gather,
+            lpv,
             upsample,
             _params: params,
         }))
     }
 
-    /// The gathered light at full resolution.
+    /// The indirect light at the traced resolution.
+    fn low(&self) -> &GiTargets {
+        match (&self.gather, &self.lpv) {
+            (Some(g), _) => &g.targets,
+            (None, Some(l)) => &l.lookup.targets,
+            (None, None) => unreachable!("RsmPasses has a gather or a volume"),
+        }
+    }
+
+    /// The indirect light at full resolution.
     pub fn targets(&self) -> &GiTargets {
-        self.upsample.as_ref().map_or(&self.gather.targets, |u| &u.targets)
+        self.upsample.as_ref().map_or(self.low(), |u| &u.targets)
+    }
+
+    /// The passes after the G-buffer, in order.
+    fn after_gbuffer(&self) -> Vec<&dyn Pass> {
+        let mut out: Vec<&dyn Pass> = Vec::new();
+        if let Some(g) = &self.gather {
+            out.push(g);
+        }
+        if let Some(l) = &self.lpv {
+            out.push(&l.inject);
+            if let Some(p) = &l.propagate {
+                out.push(p);
+            }
+            out.push(&l.lookup);
+        }
+        if let Some(up) = &self.upsample {
+            out.push(up);
+        }
+        out
+    }
+
+    /// Every image, for memory reports.
+    fn images(&self) -> Vec<&Arc<Image>> {
+        let mut out = self.render.maps.all();
+        out.extend(self.low().all());
+        out.extend(self.lpv.iter().flat_map(|l| l.volumes.all()));
+        out.extend(self.upsample.iter().flat_map(|u| u.targets.all()));
+        out
     }
 }
 
@@ -283,7 +352,7 @@ impl FramePasses {
             }
             _ => None,
         };
-        let rsm = if s.gi.mode == GiMode::Rsm && !voxel_view {
+        let rsm = if s.gi.uses_rsm() && !voxel_view {
             RsmPasses::new(ctx, scene, scene_gpu, frame, &gbuffer, &placeholders)?
         } else {
             None
@@ -369,9 +438,7 @@ impl FramePasses {
             out.extend(c.upsample.iter().flat_map(|u| u.targets.all()));
         }
         if let Some(r) = &self.rsm {
-            out.extend(r.render.maps.all());
-            out.extend(r.gather.targets.all());
-            out.extend(r.upsample.iter().flat_map(|u| u.targets.all()));
+            out.extend(r.images());
         }
         out
     }
@@ -454,10 +521,7 @@ impl FramePasses {
                     }
                 }
                 if let Some(r) = &self.rsm {
-                    passes.push(&r.gather);
-                    if let Some(up) = &r.upsample {
-                        passes.push(up);
-                    }
+                    passes.extend(r.after_gbuffer());
                 }
                 passes.push(lighting);
             }

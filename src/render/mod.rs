@@ -6,6 +6,7 @@ pub mod cones;
 pub mod frame;
 pub mod graph;
 pub mod lights;
+pub mod lpv;
 pub mod passes;
 pub mod scene_gpu;
 pub mod schedule;

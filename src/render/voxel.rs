@@ -43,7 +43,11 @@ impl VoxelGrid {
     }
 
     pub fn for_scene(scene: &Scene) -> VoxelGrid {
-        let res = scene.settings.gi.voxel_resolution;
+        VoxelGrid::for_scene_at(scene, scene.settings.gi.voxel_resolution)
+    }
+
+    /// The same placement with `res` cells per side (the light propagation volume's grid).
+    pub fn for_scene_at(scene: &Scene, res: u32) -> VoxelGrid {
         match scene.bounds {
             Some(b) => VoxelGrid::around(b, res, 0.0),
             None => VoxelGrid::around(scene.world_bounds(scene.settings.time), res, 0.05),

@@ -352,6 +352,9 @@ pub(crate) const GI_KEYS: &[&str] = &[
     "rsm_size",
     "rsm_samples",
     "rsm_radius",
+    "lpv_resolution",
+    "lpv_steps",
+    "lpv_occlusion",
 ];
 pub(crate) const SCENE_KEYS: &[&str] = &["name", "search_paths", "bounds"];
 pub(crate) const BOUNDS_KEYS: &[&str] = &["min", "max"];

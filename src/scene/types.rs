@@ -338,6 +338,10 @@ pub enum GiMode {
     /// pixel from the texels of each shadowed light's flux, normal and position maps; no
     /// visibility between the texel and the pixel.
     Rsm,
+    /// Light propagation volumes (Kaplanyan & Dachsbacher 2010): the reflective shadow maps'
+    /// texels injected as virtual point lights into a grid of 2-band spherical harmonics,
+    /// propagated cell to cell with fuzzy occlusion by a geometry volume, looked up per pixel.
+    Lpv,
 }
 
 /// What the frame shows (`--view`): the final image or a debug view.
@@ -487,6 +491,14 @@ pub struct GiSettings {
     /// `mode = "rsm"`: radius of the gathered disc around the pixel's position in the map, as a
     /// fraction of the map's side (0 < r <= 2; 0.71 reaches every texel from the map's centre).
     pub rsm_radius: f32,
+    /// `mode = "lpv"`: cells along each side of the cubic propagation grid (a power of two in
+    /// 4..=128).
+    pub lpv_resolution: u32,
+    /// `mode = "lpv"`: propagation steps (0..=128); light travels one cell per step.
+    pub lpv_steps: u32,
+    /// `mode = "lpv"`: fuzzy occlusion of propagated light by the geometry volume (from the
+    /// reflective shadow maps' texels), from the second step on.
+    pub lpv_occlusion: bool,
 }
 
 impl Default for GiSettings {
@@ -518,6 +530,9 @@ impl Default for GiSettings {
             rsm_size: 256,
             rsm_samples: 128,
             rsm_radius: 0.25,
+            lpv_resolution: 32,
+            lpv_steps: 8,
+            lpv_occlusion: true,
         }
     }
 }
@@ -586,6 +601,11 @@ impl GiSettings {
         self.validate_rsm()
     }
 
+    /// The mode renders reflective shadow maps (RSM gathers from them, LPV injects them).
+    pub fn uses_rsm(&self) -> bool {
+        matches!(self.mode, GiMode::Rsm | GiMode::Lpv)
+    }
+
     fn validate_rsm(&self) -> Result<(), (&'static str, String)> {
         let size = self.rsm_size;
         if !(16..=2048).contains(&size) || !size.is_power_of_two() {
@@ -597,6 +617,13 @@ impl GiSettings {
         let r = self.rsm_radius;
         if !(r.is_finite() && r > 0.0 && r <= 2.0) {
             return Err(("rsm_radius", format!("{r} is not in (0, 2] (a fraction of the map's side)")));
+        }
+        let res = self.lpv_resolution;
+        if !(4..=128).contains(&res) || !res.is_power_of_two() {
+            return Err(("lpv_resolution", format!("{res} is not a power of two in 4..=128")));
+        }
+        if self.lpv_steps > 128 {
+            return Err(("lpv_steps", format!("{} is not in 0..=128", self.lpv_steps)));
         }
         Ok(())
     }

@@ -3,6 +3,7 @@
 pub mod gbuffer;
 pub mod gi_trace;
 pub mod lighting;
+pub mod lpv;
 pub mod readback;
 pub mod resolve;
 pub mod rsm;
