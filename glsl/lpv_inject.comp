@@ -85,7 +85,8 @@ void main() {
     imageStore(light_g, c, g);
     imageStore(light_b, c, b);
     imageStore(geometry, c, occ);
-    imageStore(sum_r, c, r);
-    imageStore(sum_g, c, g);
-    imageStore(sum_b, c, b);
+    bool summed = grid.dims.z == 0u;
+    imageStore(sum_r, c, summed ? r : vec4(0.0));
+    imageStore(sum_g, c, summed ? g : vec4(0.0));
+    imageStore(sum_b, c, summed ? b : vec4(0.0));
 }

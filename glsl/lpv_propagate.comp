@@ -6,7 +6,8 @@
 // normal. Fluxes stay negative where the two-band lobe is (dropping them would add light:
 // radiance is clamped at the lookup). From the second step on, the
 // geometry volume halfway between the cells blocks a fraction of each flux (fuzzy occlusion).
-// The result is written for the next step and added to the running sum.
+// The result is written for the next step and added to the running sum (from the step that
+// grid.dims.z asks for on: light that has travelled at least that many cells).
 #include "common.glsl"
 #include "sh.glsl"
 
@@ -65,7 +66,9 @@ void main() {
     imageStore(dst_r, c, o[0]);
     imageStore(dst_g, c, o[1]);
     imageStore(dst_b, c, o[2]);
-    imageStore(sum_r, c, imageLoad(sum_r, c) + o[0]);
-    imageStore(sum_g, c, imageLoad(sum_g, c) + o[1]);
-    imageStore(sum_b, c, imageLoad(sum_b, c) + o[2]);
+    if (pc.step + 1u >= grid.dims.z) {
+        imageStore(sum_r, c, imageLoad(sum_r, c) + o[0]);
+        imageStore(sum_g, c, imageLoad(sum_g, c) + o[1]);
+        imageStore(sum_b, c, imageLoad(sum_b, c) + o[2]);
+    }
 }

@@ -17,6 +17,9 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const uint VIEW_COUNT = 1;
 layout(constant_id = 1) const uint SAMPLES = 64;
 layout(constant_id = 2) const float RADIUS = 0.25;  // fraction of the map's side
+// `rsm+lpv`: only texels nearer than this (world units) count, the light propagation volume
+// gives the rest; 0: every texel.
+layout(constant_id = 3) const float NEAR = 0.0;
 
 layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1) uniform GiBlock { GiParams gi; };
@@ -53,6 +56,7 @@ vec3 gather(uint layer, vec2 centre, vec3 P, vec3 N, float rotation) {
         vec3 d = P - texelFetch(rsm_position, t, 0).xyz;
         vec3 np = texelFetch(rsm_normal, t, 0).xyz;
         float d2 = dot(d, d);
+        if (NEAR > 0.0 && d2 >= NEAR * NEAR) continue;
         float len = sqrt(d2);
         float cos_p = max(dot(np, d), 0.0) / max(len, 1e-20);
         float cos_x = max(-dot(N, d), 0.0) / max(len, 1e-20);

@@ -58,10 +58,14 @@ pub enum Param {
     RsmRadius,
     /// `gi.rsm_size` (texels per side).
     RsmSize,
+    /// `gi.lpv_resolution` (cells per side).
+    LpvResolution,
+    /// `gi.lpv_steps`.
+    LpvSteps,
 }
 
 /// The `gi.mode` values a sweep can compare, in the order of their index as a knob value.
-pub const TECHNIQUES: [&str; 3] = ["none", "vct", "rsm"];
+pub const TECHNIQUES: [&str; 5] = ["none", "vct", "rsm", "lpv", "rsm+lpv"];
 
 fn technique_index(mode: &str) -> f64 {
     TECHNIQUES.iter().position(|t| *t == mode).map_or(f64::NAN, |i| i as f64)
@@ -72,7 +76,7 @@ fn vct() -> String {
 }
 
 impl Param {
-    pub const ALL: [Param; 13] = [
+    pub const ALL: [Param; 15] = [
         Param::VoxelResolution,
         Param::DiffuseCones,
         Param::DiffuseConeAngle,
@@ -86,6 +90,8 @@ impl Param {
         Param::RsmSamples,
         Param::RsmRadius,
         Param::RsmSize,
+        Param::LpvResolution,
+        Param::LpvSteps,
     ];
     /// The key under `[gi]`.
     pub fn key(self) -> &'static str {
@@ -103,6 +109,8 @@ impl Param {
             Param::RsmSamples => "rsm_samples",
             Param::RsmRadius => "rsm_radius",
             Param::RsmSize => "rsm_size",
+            Param::LpvResolution => "lpv_resolution",
+            Param::LpvSteps => "lpv_steps",
         }
     }
     /// Short prefix in configuration labels.
@@ -121,6 +129,8 @@ impl Param {
             Param::RsmSamples => "n",
             Param::RsmRadius => "r",
             Param::RsmSize => "m",
+            Param::LpvResolution => "g",
+            Param::LpvSteps => "p",
         }
     }
     fn integer(self) -> bool {
@@ -300,6 +310,11 @@ pub struct Row {
     pub rsm_radius: f32,
     #[serde(default)]
     pub rsm_size: u32,
+    /// `gi.lpv_resolution`, `gi.lpv_steps` (0 in rows from before LPV).
+    #[serde(default)]
+    pub lpv_resolution: u32,
+    #[serde(default)]
+    pub lpv_steps: u32,
     /// Median host wall clock of a frame that updates the voxels (relight, mips, bounces)
     /// and traces: the cost when lights or objects move. The front is drawn against this.
     pub frame_ms: f64,
@@ -339,6 +354,8 @@ impl Row {
             rsm_samples: s.rsm_samples,
             rsm_radius: s.rsm_radius,
             rsm_size: s.rsm_size,
+            lpv_resolution: s.lpv_resolution,
+            lpv_steps: s.lpv_steps,
             frame_ms: time[0],
             frame_p95_ms: time[1],
             static_frame_ms: time[2],
@@ -421,6 +438,8 @@ impl Row {
             Param::RsmSamples => self.rsm_samples as f64,
             Param::RsmRadius => self.rsm_radius as f64,
             Param::RsmSize => self.rsm_size as f64,
+            Param::LpvResolution => self.lpv_resolution as f64,
+            Param::LpvSteps => self.lpv_steps as f64,
         }
     }
 }

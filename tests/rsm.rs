@@ -239,6 +239,7 @@ fn every_map_volume_and_image_is_finite_and_the_light_never_negative() {
     let passes = [
         ("rsm", vec!["reflective shadow maps", "rsm gather", "gi upsample"]),
         ("lpv", vec!["reflective shadow maps", "lpv inject", "lpv propagate", "lpv lookup", "gi upsample"]),
+        ("rsm+lpv", vec!["rsm gather", "lpv inject", "lpv propagate", "lpv lookup", "gi add", "gi upsample"]),
     ];
     for (mode, expected) in passes {
         let m = format!("{mode:?}");
@@ -270,12 +271,42 @@ fn every_map_volume_and_image_is_finite_and_the_light_never_negative() {
 #[test]
 fn every_mode_renders_the_same_rsm_and_lpv_image() {
     let ctx = context();
-    for mode in ["\"rsm\"", "\"lpv\""] {
+    for mode in ["\"rsm\"", "\"lpv\"", "\"rsm+lpv\""] {
         same_image_in_every_schedule(
             &ctx,
-            cornell(&[("gi.mode", mode), ("gi.downsample", "2"), ("gi.rsm_size", "64")]),
+            cornell(&[("gi.mode", mode), ("gi.downsample", "2"), ("gi.rsm_size", "64"), ("gi.lpv_resolution", "16")]),
         );
     }
+    assert_no_validation_messages(&ctx);
+}
+
+/// The study's mix: in the async modes the RSM gather goes to the compute queue and the light
+/// propagation volume to the graphics queue, and the indirect light is the gather's near
+/// field plus the volume's far field: less than the two techniques' lights added.
+#[test]
+fn the_mix_puts_the_gather_on_compute_and_the_volume_on_graphics() {
+    let ctx = context();
+    let overrides = |mode| {
+        vec![("gi.mode", mode), ("gi.rsm_size", "64"), ("gi.lpv_resolution", "16"), ("render.view", "\"indirect\"")]
+    };
+    let options = RenderOptions { mode: Mode::Async, frames_in_flight: 2 };
+    let mut r = Renderer::with_options(&ctx, cornell(&overrides("\"rsm+lpv\"")), options).unwrap();
+    r.render(0.0, true).unwrap();
+    let mix = r.output().radiance;
+    let submits = r.scheduler().submits().to_vec();
+    let on = |queue, pass: &str| submits.iter().any(|s| s.queue == queue && s.passes.iter().any(|p| p == pass));
+    use dvsgi::render::graph::QueueKind::{Compute, Graphics};
+    assert!(on(Compute, "rsm gather"), "{submits:?}");
+    for p in ["lpv inject", "lpv propagate", "lpv lookup"] {
+        assert!(on(Graphics, p), "{p}: {submits:?}");
+    }
+    r.wait_idle().unwrap();
+    drop(r);
+    let lum = |v: &[f32]| v.chunks_exact(4).map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>();
+    let (rsm, _) = render(&ctx, cornell(&overrides("\"rsm\"")));
+    let (lpv, _) = render(&ctx, cornell(&overrides("\"lpv\"")));
+    assert!(lum(&mix) > 0.0);
+    assert!(lum(&mix) < lum(&rsm.radiance) + lum(&lpv.radiance), "the mix counts light twice");
     assert_no_validation_messages(&ctx);
 }
 

@@ -6,7 +6,9 @@
 
 struct LpvGrid {
     vec4 origin;  // xyz min corner, w cell size
-    uvec4 dims;   // x cells per side, y 1 with occlusion
+    uvec4 dims;   // x cells per side, y 1 with occlusion, z leading terms left out of the sum
+                  // (0: all; `rsm+lpv` 2: the injected light and the first step's, which the
+                  // RSM gather covers)
 };
 
 const float SH_C0 = 0.2820948;

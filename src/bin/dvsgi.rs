@@ -88,7 +88,7 @@ enum Command {
         /// (overrides render.view).
         #[arg(long)]
         view: Option<String>,
-        /// Global illumination: none | vct | rsm (overrides gi.mode).
+        /// Global illumination: none | vct | rsm | lpv | rsm+lpv (overrides gi.mode).
         #[arg(long)]
         gi: Option<String>,
         /// Queue schedule: sync | async | async-lagged (async-lagged needs earlier frames:
@@ -149,8 +149,8 @@ enum Command {
         out: PathBuf,
         /// A knob and its values, e.g. --grid voxel_resolution=32,64,128 (repeatable; knobs:
         /// voxel_resolution, diffuse_cones, diffuse_cone_angle, step, bounces, downsample, ao
-        /// (0 or 1), bounce_cones, bounce_interleave, mode (the technique: none, vct, rsm),
-        /// rsm_samples, rsm_radius, rsm_size). Sweeps with other grids into the same directory
+        /// (0 or 1), bounce_cones, bounce_interleave, mode (the technique: none, vct, rsm, lpv,
+        /// rsm+lpv), rsm_samples, rsm_radius, rsm_size, lpv_resolution, lpv_steps). Sweeps with other grids into the same directory
         /// add their rows to one frontier, e.g. the cone-tracing grid, then --grid mode=rsm ....
         /// Without --grid: the default grid of 216 configurations (ACCURACY.md).
         #[arg(long)]

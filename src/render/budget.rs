@@ -48,7 +48,7 @@ impl Estimate {
         if s.gi.uses_rsm() && !voxel_view {
             let views = crate::render::lights::rsm_views(scene).len() as u64;
             if views > 0 {
-                if s.gi.mode == GiMode::Lpv {
+                if s.gi.uses_lpv() {
                     // Ten RGBA32F volumes: light ping-pong and sum (3 colours each), geometry.
                     let lpv = 16 * (s.gi.lpv_resolution as u64).pow(3);
                     e.volumes += 10 * lpv;
@@ -56,10 +56,12 @@ impl Estimate {
                 }
                 // Flux RGBA32F 16 + normal RGBA16F 8 + position RGBA32F 16 + depth 4 per texel.
                 e.shadow_maps += 44 * (s.gi.rsm_size as u64).pow(2) * views;
-                // The gathered light (RGBA16F) at 1/k, and at full resolution when k > 1.
+                // The gathered light (RGBA16F) at 1/k, and at full resolution when k > 1; the
+                // mix has the gather's, the lookup's and their sum at 1/k.
                 let k = s.gi.downsample as u64;
                 let low = (iw as u64).div_ceil(k) * (ih as u64).div_ceil(k);
-                e.targets += 8 * (low + if k > 1 { px } else { 0 });
+                let lows = if s.gi.mode == GiMode::RsmLpv { 3 } else { 1 };
+                e.targets += 8 * (lows * low + if k > 1 { px } else { 0 });
             }
         }
         if s.gi.mode == GiMode::Vct || voxel_view {

@@ -3,7 +3,7 @@
 
 use super::graph::{Pass, QueueKind};
 use super::passes::gbuffer::{GBuffer, GBufferPass};
-use super::passes::gi_trace::{GiPlaceholders, GiTargets, GiTracePass, GiUpsamplePass};
+use super::passes::gi_trace::{GiAddPass, GiPlaceholders, GiTargets, GiTracePass, GiUpsamplePass};
 use super::passes::lighting::{GiInputs, LightingOutput, LightingPass};
 use super::passes::lpv::{LpvInjectPass, LpvLookupPass, LpvPropagatePass, LpvVolumes};
 use super::passes::readback::ReadbackPasses;
@@ -79,15 +79,18 @@ pub struct LpvPasses {
     pub lookup: LpvLookupPass,
 }
 
-/// The techniques built on reflective shadow maps (`gi.mode = "rsm"` or `"lpv"`): the maps of
-/// every shadowed light, then the per-pixel RSM gather or the light propagation volume, and
-/// the upsample when working at reduced resolution.
+/// The techniques built on reflective shadow maps (`gi.mode = "rsm"`, `"lpv"` or
+/// `"rsm+lpv"`): the maps of every shadowed light, then the per-pixel RSM gather and/or the
+/// light propagation volume (their sum for the mix), and the upsample when working at reduced
+/// resolution.
 pub struct RsmPasses {
     pub render: RsmPass,
     /// `gi.mode = "rsm"`.
     pub gather: Option<RsmGatherPass>,
     /// `gi.mode = "lpv"`.
     pub lpv: Option<LpvPasses>,
+    /// `gi.mode = "rsm+lpv"`: the gather's near field plus the volume's far field.
+    pub add: Option<GiAddPass>,
     /// Only with `gi.downsample` > 1.
     pub upsample: Option<GiUpsamplePass>,
     /// The downsampling factor for the gather, the lookup and the upsample (`GiParams`).
@@ -113,46 +116,68 @@ impl RsmPasses {
         let params = Buffer::uniform(ctx, "rsm gi params", &crate::render::cones::GpuGiParams::new(gi, 1, 1.0, 1))?;
         let (width, height) = scene.settings.internal_size();
         let k = gi.downsample;
-        let what = if gi.mode == GiMode::Lpv { "lpv" } else { "rsm" };
-        let label = if k > 1 { format!(" ({what}, 1/{k})") } else { format!(" ({what})") };
-        let low = GiTargets::new(ctx, &label, width.div_ceil(k), height.div_ceil(k), false, false)?;
-        let upsample = if k > 1 {
-            let full = GiTargets::new(ctx, &format!(" ({what})"), width, height, false, false)?;
-            Some(GiUpsamplePass::new(ctx, frame, gbuffer, &params, &low, full, placeholders)?)
+        let (lw, lh) = (width.div_ceil(k), height.div_ceil(k));
+        let low = |what: &str| {
+            let label = if k > 1 { format!(" ({what}, 1/{k})") } else { format!(" ({what})") };
+            GiTargets::new(ctx, &label, lw, lh, false, false)
+        };
+        let mix = gi.mode == GiMode::RsmLpv;
+        let grid = crate::render::lpv::grid(scene);
+        let split = crate::render::lpv::MIX_SPLIT_CELLS;
+        let lpv = if gi.uses_lpv() {
+            let skipped = if mix { split } else { 0 };
+            // The study's mix: the volume on the graphics queue beside the gather on compute.
+            let q = if mix { QueueKind::Graphics } else { QueueKind::Compute };
+            let volumes = Arc::new(LpvVolumes::new(ctx, grid, gi.lpv_occlusion, skipped)?);
+            let propagate =
+                (gi.lpv_steps > 0).then(|| LpvPropagatePass::new(ctx, &volumes, gi.lpv_steps, q)).transpose()?;
+            Some(LpvPasses {
+                inject: LpvInjectPass::new(ctx, frame, &maps, &volumes, q)?,
+                propagate,
+                lookup: LpvLookupPass::new(ctx, frame, gbuffer, &volumes, &params, low("lpv")?, q)?,
+                volumes,
+            })
         } else {
             None
         };
-        let (gather, lpv) = if gi.mode == GiMode::Lpv {
-            let q = QueueKind::Compute;
-            let volumes = Arc::new(LpvVolumes::new(ctx, crate::render::lpv::grid(scene), gi.lpv_occlusion)?);
-            let propagate =
-                (gi.lpv_steps > 0).then(|| LpvPropagatePass::new(ctx, &volumes, gi.lpv_steps, q)).transpose()?;
-            let lpv = LpvPasses {
-                inject: LpvInjectPass::new(ctx, frame, &maps, &volumes, q)?,
-                propagate,
-                lookup: LpvLookupPass::new(ctx, frame, gbuffer, &volumes, &params, low, q)?,
-                volumes,
-            };
-            (None, Some(lpv))
+        let gather = if gi.gathers_rsm() {
+            let near = if mix { split as f32 * grid.voxel_size } else { 0.0 };
+            Some(RsmGatherPass::new(ctx, frame, gbuffer, &maps, &params, low("rsm")?, gi, near)?)
         } else {
-            let gather = RsmGatherPass::new(ctx, frame, gbuffer, &maps, &params, low, gi.rsm_samples, gi.rsm_radius)?;
-            (Some(gather), None)
+            None
         };
-        Ok(Some(RsmPasses {
+        let add = match (&gather, &lpv) {
+            (Some(g), Some(l)) => Some(GiAddPass::new(ctx, &g.targets, &l.lookup.targets, low("rsm+lpv")?)?),
+            _ => None,
+        };
+        let what = match gi.mode {
+            GiMode::Lpv => "lpv",
+            GiMode::RsmLpv => "rsm+lpv",
+            _ => "rsm",
+        };
+        let mut passes = RsmPasses {
             render: RsmPass::new(ctx, scene_gpu, frame, &maps)?,
             gather,
             lpv,
-            upsample,
+            add,
+            upsample: None,
             _params: params,
-        }))
+        };
+        if k > 1 {
+            let full = GiTargets::new(ctx, &format!(" ({what})"), width, height, false, false)?;
+            let up = GiUpsamplePass::new(ctx, frame, gbuffer, &passes._params, passes.low(), full, placeholders)?;
+            passes.upsample = Some(up);
+        }
+        Ok(Some(passes))
     }
 
     /// The indirect light at the traced resolution.
     fn low(&self) -> &GiTargets {
-        match (&self.gather, &self.lpv) {
-            (Some(g), _) => &g.targets,
-            (None, Some(l)) => &l.lookup.targets,
-            (None, None) => unreachable!("RsmPasses has a gather or a volume"),
+        match (&self.add, &self.gather, &self.lpv) {
+            (Some(a), _, _) => &a.targets,
+            (None, Some(g), _) => &g.targets,
+            (None, None, Some(l)) => &l.lookup.targets,
+            (None, None, None) => unreachable!("RsmPasses has a gather or a volume"),
         }
     }
 
@@ -174,6 +199,9 @@ impl RsmPasses {
             }
             out.push(&l.lookup);
         }
+        if let Some(a) = &self.add {
+            out.push(a);
+        }
         if let Some(up) = &self.upsample {
             out.push(up);
         }
@@ -183,7 +211,9 @@ impl RsmPasses {
     /// Every image, for memory reports.
     fn images(&self) -> Vec<&Arc<Image>> {
         let mut out = self.render.maps.all();
-        out.extend(self.low().all());
+        out.extend(self.gather.iter().flat_map(|g| g.targets.all()));
+        out.extend(self.lpv.iter().flat_map(|l| l.lookup.targets.all()));
+        out.extend(self.add.iter().flat_map(|a| a.targets.all()));
         out.extend(self.lpv.iter().flat_map(|l| l.volumes.all()));
         out.extend(self.upsample.iter().flat_map(|u| u.targets.all()));
         out

@@ -51,14 +51,22 @@ pub fn grid(scene: &Scene) -> VoxelGrid {
 pub struct GpuLpvGrid {
     /// xyz the grid's min corner, w the cell size.
     pub origin: [f32; 4],
-    /// x cells per side, y 1 with occlusion.
+    /// x cells per side, y 1 with occlusion, z leading terms (the injected light, then each
+    /// step's) left out of the sum.
     pub dims: [u32; 4],
 }
 
+/// `rsm+lpv`: the volume sums the light that has travelled this many cells or more; the RSM
+/// gather takes the texels nearer than this many cells.
+pub const MIX_SPLIT_CELLS: u32 = 2;
+
 impl GpuLpvGrid {
-    pub fn new(grid: &VoxelGrid, occlusion: bool) -> GpuLpvGrid {
+    pub fn new(grid: &VoxelGrid, occlusion: bool, skipped: u32) -> GpuLpvGrid {
         let o = grid.origin;
-        GpuLpvGrid { origin: [o.x, o.y, o.z, grid.voxel_size], dims: [grid.resolution, u32::from(occlusion), 0, 0] }
+        GpuLpvGrid {
+            origin: [o.x, o.y, o.z, grid.voxel_size],
+            dims: [grid.resolution, u32::from(occlusion), skipped, 0],
+        }
     }
 }
 

@@ -342,6 +342,11 @@ pub enum GiMode {
     /// texels injected as virtual point lights into a grid of 2-band spherical harmonics,
     /// propagated cell to cell with fuzzy occlusion by a geometry volume, looked up per pixel.
     Lpv,
+    /// Both, split by distance (the async-compute study's mix): the RSM gather gives the light
+    /// of texels nearer than two LPV cells (compute queue), the LPV the light that has
+    /// travelled two cells or more (graphics queue); their sum is the indirect light.
+    #[serde(rename = "rsm+lpv")]
+    RsmLpv,
 }
 
 /// What the frame shows (`--view`): the final image or a debug view.
@@ -603,7 +608,17 @@ impl GiSettings {
 
     /// The mode renders reflective shadow maps (RSM gathers from them, LPV injects them).
     pub fn uses_rsm(&self) -> bool {
-        matches!(self.mode, GiMode::Rsm | GiMode::Lpv)
+        matches!(self.mode, GiMode::Rsm | GiMode::Lpv | GiMode::RsmLpv)
+    }
+
+    /// The per-pixel RSM gather runs (`rsm`, `rsm+lpv`).
+    pub fn gathers_rsm(&self) -> bool {
+        matches!(self.mode, GiMode::Rsm | GiMode::RsmLpv)
+    }
+
+    /// A light propagation volume is built (`lpv`, `rsm+lpv`).
+    pub fn uses_lpv(&self) -> bool {
+        matches!(self.mode, GiMode::Lpv | GiMode::RsmLpv)
     }
 
     fn validate_rsm(&self) -> Result<(), (&'static str, String)> {

@@ -271,3 +271,48 @@ impl Pass for GiUpsamplePass {
         self.pipeline.dispatch(cmd, [e.width, e.height, 1], [8, 8, 1]);
     }
 }
+
+/// `rsm+lpv`: the sum of two reduced-resolution diffuse results (the RSM gather's near field
+/// and the volume's far field), the input of the upsample and the lighting pass.
+pub struct GiAddPass {
+    parts: [Arc<Image>; 2],
+    pub targets: GiTargets,
+    pipeline: Pipeline,
+    set: DescriptorSet,
+}
+
+impl GiAddPass {
+    pub fn new(ctx: &Arc<Context>, a: &GiTargets, b: &GiTargets, targets: GiTargets) -> GpuResult<Self> {
+        let set = DescriptorSet::new(
+            ctx,
+            "gi add",
+            vk::ShaderStageFlags::COMPUTE,
+            &[
+                Bind::StorageImage(a.diffuse.view),
+                Bind::StorageImage(b.diffuse.view),
+                Bind::StorageImage(targets.diffuse.view),
+            ],
+        )?;
+        let pipeline = Pipeline::compute(ctx, "gi add", shaders::GI_ADD_COMP, &[set.layout], 0, &[])?;
+        Ok(GiAddPass { parts: [a.diffuse.clone(), b.diffuse.clone()], targets, pipeline, set })
+    }
+}
+
+impl Pass for GiAddPass {
+    fn name(&self) -> &str {
+        "gi add"
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        let mut uses: Vec<Use> = self.parts.iter().map(|i| Use::image(i, Access::ComputeShaderReadStorage)).collect();
+        uses.push(Use::overwrite(&self.targets.diffuse, Access::ComputeShaderWrite));
+        uses
+    }
+    fn queue(&self) -> QueueKind {
+        QueueKind::Compute
+    }
+    fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
+        let e = self.targets.diffuse.extent2d();
+        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.dispatch(cmd, [e.width, e.height, 1], [8, 8, 1]);
+    }
+}

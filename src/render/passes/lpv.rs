@@ -35,7 +35,8 @@ pub struct LpvVolumes {
 }
 
 impl LpvVolumes {
-    pub fn new(ctx: &Arc<Context>, grid: VoxelGrid, occlusion: bool) -> GpuResult<LpvVolumes> {
+    /// `skipped`: leading terms left out of the sum (`GpuLpvGrid::dims.z`).
+    pub fn new(ctx: &Arc<Context>, grid: VoxelGrid, occlusion: bool, skipped: u32) -> GpuResult<LpvVolumes> {
         let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC;
         let mk =
             |name: String| Image::new(ctx, &name, ImageDesc::d3(LPV_FORMAT, grid.resolution, 1, usage)).map(Arc::new);
@@ -54,7 +55,7 @@ impl LpvVolumes {
                 .address_mode_w(edge),
         )?;
         Ok(LpvVolumes {
-            grid_buffer: Buffer::uniform(ctx, "lpv grid", &GpuLpvGrid::new(&grid, occlusion))?,
+            grid_buffer: Buffer::uniform(ctx, "lpv grid", &GpuLpvGrid::new(&grid, occlusion, skipped))?,
             grid,
             light: [rgb("light a")?, rgb("light b")?],
             geometry: mk("lpv geometry".into())?,

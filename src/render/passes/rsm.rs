@@ -184,7 +184,8 @@ pub struct RsmGatherPass {
 }
 
 impl RsmGatherPass {
-    /// `gi_params` carries the downsampling factor (`GiParams.counts.y`).
+    /// `gi_params` carries the downsampling factor (`GiParams.counts.y`); `near` > 0 keeps
+    /// only texels nearer than that (world units).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Arc<Context>,
@@ -193,8 +194,8 @@ impl RsmGatherPass {
         maps: &Arc<RsmMaps>,
         gi_params: &Buffer,
         targets: GiTargets,
-        samples: u32,
-        radius: f32,
+        gi: &crate::scene::GiSettings,
+        near: f32,
     ) -> GpuResult<Self> {
         let sampler = GBuffer::sampler(ctx)?;
         let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
@@ -215,7 +216,8 @@ impl RsmGatherPass {
                 Bind::StorageImage(targets.diffuse.view),
             ],
         )?;
-        let spec = [(0, maps.views.len() as u32), (1, samples), (2, radius.to_bits())];
+        let spec =
+            [(0, maps.views.len() as u32), (1, gi.rsm_samples), (2, gi.rsm_radius.to_bits()), (3, near.to_bits())];
         let pipeline = Pipeline::compute(ctx, "rsm gather", shaders::RSM_GATHER_COMP, &[set.layout], 0, &spec)?;
         Ok(RsmGatherPass {
             frame: frame.clone(),
