@@ -7,9 +7,11 @@
 #   info.txt               dvsgi info (devices, queue families, topology, limits) + per-scene costs
 #   tests.log              the test suite, validation on (any validation message fails a test)
 #   bench-*.json/.svg/.txt bench, static and dynamic, Cornell box and Sponza, 1920x1080,
-#                          128^3 and 256^3 voxels, sync / async / async-lagged (JSON, timeline, table)
+#                          128^3 and 256^3 voxels, sync / async / async-lagged (JSON, timeline, table);
+#                          bench-{cornell,sponza}-{rsm,lpv,rsm-lpv}: the other techniques, static
+#   sweep-cornell/         a short speed/accuracy sweep against the path-traced reference, with
+#                          rows for rsm, lpv and rsm+lpv on the same frontier
 #   serial-*.json/.txt     the serial profile (every pass submitted alone and host-timed)
-#   sweep-cornell/         a short speed/accuracy sweep against the path-traced reference
 #   curves/                per-pass cost against voxel resolution, pixels and triangles, with
 #                          fitted exponents (tools/cost-curves.py; curves.md is the table)
 #   steps.tsv, report.log  each step's exit status and seconds; README.md summarises
@@ -158,6 +160,17 @@ for run in "cornell static cornell-box" "cornell dynamic dynamic-stress" \
   done
 done
 
+# ----- 3b. The study's other techniques and its mix (issue 18): static, all modes. -----
+for run in "cornell cornell-box" "sponza sponza"; do
+  read -r name scene <<<"$run"
+  for mode in rsm lpv rsm+lpv; do
+    tag="$name-${mode/+/-}"
+    step "bench-$tag" 300 "$bin/bench" --scene "scenes/$scene.toml" --modes sync,async,async-lagged \
+      --width "$w" --height "$h" --set "gi.mode=\"$mode\"" --frames "$frames" --warmup "$warmup" \
+      --json "$out/bench-$tag.json" --timeline "$out/bench-$tag.svg" >"$out/bench-$tag.txt" 2>&1
+  done
+done
+
 # ----- 4. Serial profile: every pass alone, host-timed, beside the timestamps. -----
 for run in "cornell cornell-box ${res[0]}" "sponza sponza ${res[1]}"; do
   read -r name scene v <<<"$run"
@@ -168,13 +181,16 @@ done
 
 # ----- 5. A short sweep against the path-traced reference. -----
 if [ "$quick" = 1 ]; then
-  sweep=(--grid voxel_resolution=16,32 --spp 16 --width 32 --height 32 --frames 1)
+  grid=(--grid voxel_resolution=16,32) sweep=(--spp 16 --width 32 --height 32 --frames 1)
 else
-  sweep=(--grid voxel_resolution=64,128,256 --grid diffuse_cones=6,9 --spp 1024 --width 480 --height 270
-    --frames 10)
+  grid=(--grid voxel_resolution=64,128,256 --grid diffuse_cones=6,9)
+  sweep=(--spp 1024 --width 480 --height 270 --frames 10)
 fi
-step sweep-cornell 420 "$bin/dvsgi" sweep scenes/cornell-box.toml --out "$out/sweep-cornell" "${sweep[@]}" \
+step sweep-cornell 420 "$bin/dvsgi" sweep scenes/cornell-box.toml --out "$out/sweep-cornell" "${grid[@]}" "${sweep[@]}" \
   >"$out/sweep-cornell.txt" 2>&1
+# The other techniques into the same directory: one frontier with every technique.
+step sweep-cornell-rsm-lpv 420 "$bin/dvsgi" sweep scenes/cornell-box.toml --out "$out/sweep-cornell" \
+  "${sweep[@]}" --grid mode=rsm,lpv,rsm+lpv >>"$out/sweep-cornell.txt" 2>&1
 
 # ----- 6. Cost curves: per-pass cost against voxel resolution, pixels and triangles. -----
 if [ "$quick" = 1 ]; then

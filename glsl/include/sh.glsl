@@ -9,6 +9,7 @@ struct LpvGrid {
     uvec4 dims;   // x cells per side, y 1 with occlusion, z leading terms left out of the sum
                   // (0: all; `rsm+lpv` 2: the injected light and the first step's, which the
                   // RSM gather covers)
+    vec4 quanta;  // x light, y geometry: the value of one unit of the injection's fixed point
 };
 
 const float SH_C0 = 0.2820948;

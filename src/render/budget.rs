@@ -49,9 +49,10 @@ impl Estimate {
             let views = crate::render::lights::rsm_views(scene).len() as u64;
             if views > 0 {
                 if s.gi.uses_lpv() {
-                    // Ten RGBA32F volumes: light ping-pong and sum (3 colours each), geometry.
+                    // Ten RGBA32F volumes (light ping-pong and sum, 3 colours each, geometry)
+                    // and the injection's sums (16 ints per cell).
                     let lpv = 16 * (s.gi.lpv_resolution as u64).pow(3);
-                    e.volumes += 10 * lpv;
+                    e.volumes += 10 * lpv + 4 * lpv;
                     e.largest_volume = e.largest_volume.max(lpv);
                 }
                 // Flux RGBA32F 16 + normal RGBA16F 8 + position RGBA32F 16 + depth 4 per texel.

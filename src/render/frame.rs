@@ -128,7 +128,8 @@ impl RsmPasses {
             let skipped = if mix { split } else { 0 };
             // The study's mix: the volume on the graphics queue beside the gather on compute.
             let q = if mix { QueueKind::Graphics } else { QueueKind::Compute };
-            let volumes = Arc::new(LpvVolumes::new(ctx, grid, gi.lpv_occlusion, skipped)?);
+            let quanta = crate::render::lpv::quanta(scene, maps.views.len());
+            let volumes = Arc::new(LpvVolumes::new(ctx, grid, gi.lpv_occlusion, skipped, quanta)?);
             let propagate =
                 (gi.lpv_steps > 0).then(|| LpvPropagatePass::new(ctx, &volumes, gi.lpv_steps, q)).transpose()?;
             Some(LpvPasses {

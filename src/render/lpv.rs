@@ -54,6 +54,44 @@ pub struct GpuLpvGrid {
     /// x cells per side, y 1 with occlusion, z leading terms (the injected light, then each
     /// step's) left out of the sum.
     pub dims: [u32; 4],
+    /// x, y: the value of one unit of the injection's fixed-point light and geometry sums.
+    pub quanta: [f32; 4],
+}
+
+/// The injection adds texels into 32-bit integers (deterministic in any order): one unit of
+/// light is this fraction of the largest coefficient a cell can reach, which leaves a factor
+/// of two of headroom below `i32::MAX`.
+const FIXED_POINT_RANGE: f32 = (1u32 << 30) as f32;
+
+/// The largest flux all reflective shadow maps together can hold: each light's power that
+/// reaches the scene (a sun's irradiance over its whole-scene view's square, a point or spot
+/// light's intensity over the sphere), largest channel, reflected with albedo at most 1.
+fn max_map_flux(scene: &Scene) -> f32 {
+    let t = scene.settings.time;
+    let bounds = scene.bounds.unwrap_or_else(|| scene.world_bounds(t));
+    let radius = if bounds.is_empty() { 1.0 } else { (bounds.extent().length() * 0.5).max(1e-3) };
+    let sphere = 4.0 * std::f32::consts::PI;
+    scene
+        .lights
+        .iter()
+        .filter(|l| l.cast_shadows)
+        .map(|l| match l.at_time(t) {
+            crate::scene::LightKind::Directional { irradiance, .. } => irradiance.max_element() * 4.0 * radius * radius,
+            crate::scene::LightKind::Point { intensity, .. } | crate::scene::LightKind::Spot { intensity, .. } => {
+                intensity.max_element() * sphere
+            }
+        })
+        .sum()
+}
+
+/// The fixed-point units of the injection: light (W/sr per SH coefficient) and geometry
+/// (blocking per coefficient; a cell's surfaces, seen from up to `views` views, cover at most
+/// 64 cell faces each).
+pub fn quanta(scene: &Scene, views: usize) -> [f32; 2] {
+    let light = max_map_flux(scene) / std::f32::consts::PI * COS_LOBE_C1;
+    let geometry = 64.0 * views.max(1) as f32 * COS_LOBE_C1;
+    let unit = |max: f32| if max.is_finite() && max > 0.0 { max / FIXED_POINT_RANGE } else { 1.0 };
+    [unit(light), unit(geometry)]
 }
 
 /// `rsm+lpv`: the volume sums the light that has travelled this many cells or more; the RSM
@@ -61,11 +99,12 @@ pub struct GpuLpvGrid {
 pub const MIX_SPLIT_CELLS: u32 = 2;
 
 impl GpuLpvGrid {
-    pub fn new(grid: &VoxelGrid, occlusion: bool, skipped: u32) -> GpuLpvGrid {
+    pub fn new(grid: &VoxelGrid, occlusion: bool, skipped: u32, quanta: [f32; 2]) -> GpuLpvGrid {
         let o = grid.origin;
         GpuLpvGrid {
             origin: [o.x, o.y, o.z, grid.voxel_size],
             dims: [grid.resolution, u32::from(occlusion), skipped, 0],
+            quanta: [quanta[0], quanta[1], 0.0, 0.0],
         }
     }
 }

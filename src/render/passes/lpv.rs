@@ -14,12 +14,13 @@ use crate::render::lpv::GpuLpvGrid;
 use crate::render::voxel::VoxelGrid;
 use crate::render::FrameBuffers;
 use ash::vk;
+use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 /// Intensity SH per colour and the geometry volume: RGBA32F (four coefficients).
 pub const LPV_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
-/// Widest texel rectangle a cell walks per map before it strides (lpv_inject.comp).
-const MAX_SPAN: u32 = 64;
+/// Ints per cell in the injection's accumulator (lpv_accum.glsl).
+const ACCUM_INTS: u64 = 16;
 
 pub struct LpvVolumes {
     pub grid: VoxelGrid,
@@ -30,13 +31,22 @@ pub struct LpvVolumes {
     pub geometry: Arc<Image>,
     /// The injected light plus every step's: what the lookup reads.
     pub sum: [Arc<Image>; 3],
+    /// The injection's fixed-point sums (lpv_accum.glsl).
+    pub accum: Buffer,
     /// Trilinear, clamped to the edge (surfaces on the grid's boundary keep their cells).
     pub sampler: Sampler,
 }
 
 impl LpvVolumes {
-    /// `skipped`: leading terms left out of the sum (`GpuLpvGrid::dims.z`).
-    pub fn new(ctx: &Arc<Context>, grid: VoxelGrid, occlusion: bool, skipped: u32) -> GpuResult<LpvVolumes> {
+    /// `skipped`: leading terms left out of the sum (`GpuLpvGrid::dims.z`); `quanta`: the
+    /// injection's fixed-point units (`render::lpv::quanta`).
+    pub fn new(
+        ctx: &Arc<Context>,
+        grid: VoxelGrid,
+        occlusion: bool,
+        skipped: u32,
+        quanta: [f32; 2],
+    ) -> GpuResult<LpvVolumes> {
         let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC;
         let mk =
             |name: String| Image::new(ctx, &name, ImageDesc::d3(LPV_FORMAT, grid.resolution, 1, usage)).map(Arc::new);
@@ -55,7 +65,14 @@ impl LpvVolumes {
                 .address_mode_w(edge),
         )?;
         Ok(LpvVolumes {
-            grid_buffer: Buffer::uniform(ctx, "lpv grid", &GpuLpvGrid::new(&grid, occlusion, skipped))?,
+            grid_buffer: Buffer::uniform(ctx, "lpv grid", &GpuLpvGrid::new(&grid, occlusion, skipped, quanta))?,
+            accum: Buffer::new(
+                ctx,
+                "lpv injection sums",
+                ACCUM_INTS * 4 * (grid.resolution as u64).pow(3),
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::GpuOnly,
+            )?,
             grid,
             light: [rgb("light a")?, rgb("light b")?],
             geometry: mk("lpv geometry".into())?,
@@ -74,14 +91,17 @@ fn storage<'a>(images: &[Arc<Image>]) -> Vec<Bind<'a>> {
     images.iter().map(|i| Bind::StorageImage(i.view)).collect()
 }
 
-/// Injection: every cell gathers the VPLs and blocking surfaces of the maps' texels in it.
+/// Injection: every map texel adds its VPL and its blocking lobe to the cells they fall in
+/// (fixed-point integer atomics), then the sums become the volumes. Three dispatches: clear
+/// the accumulator, add the texels, resolve.
 pub struct LpvInjectPass {
     frame: FrameBuffers,
     maps: Arc<RsmMaps>,
     vols: Arc<LpvVolumes>,
     queue: QueueKind,
-    pipeline: Pipeline,
-    set: DescriptorSet,
+    clear: (Pipeline, DescriptorSet),
+    inject: (Pipeline, DescriptorSet),
+    resolve: (Pipeline, DescriptorSet),
     _sampler: Sampler,
 }
 
@@ -95,22 +115,33 @@ impl LpvInjectPass {
     ) -> GpuResult<Self> {
         let sampler = GBuffer::sampler(ctx)?;
         let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        let mut binds =
-            vec![Bind::Uniform(&vols.grid_buffer), Bind::Storage(&frame.shadow_views), Bind::Storage(&maps.table)];
+        let stage = vk::ShaderStageFlags::COMPUTE;
+        let step = |name: &str, code: &[u8], binds: &[Bind]| -> GpuResult<(Pipeline, DescriptorSet)> {
+            let set = DescriptorSet::new(ctx, name, stage, binds)?;
+            Ok((Pipeline::compute(ctx, name, code, &[set.layout], 0, &[])?, set))
+        };
+        let clear = step(
+            "lpv clear",
+            shaders::LPV_CLEAR_COMP,
+            &[Bind::Uniform(&vols.grid_buffer), Bind::Storage(&vols.accum)],
+        )?;
+        let mut binds = vec![Bind::Uniform(&vols.grid_buffer)];
         binds.extend(maps.colors().map(|i| Bind::Sampled(i.view, sampler.raw, ro)));
+        binds.push(Bind::Storage(&vols.accum));
+        let inject = step("lpv inject", shaders::LPV_INJECT_COMP, &binds)?;
+        let mut binds = vec![Bind::Uniform(&vols.grid_buffer), Bind::Storage(&vols.accum)];
         binds.extend(storage(&vols.light[0]));
         binds.push(Bind::StorageImage(vols.geometry.view));
         binds.extend(storage(&vols.sum));
-        let set = DescriptorSet::new(ctx, "lpv inject", vk::ShaderStageFlags::COMPUTE, &binds)?;
-        let spec = [(0, maps.views.len() as u32), (1, MAX_SPAN)];
-        let pipeline = Pipeline::compute(ctx, "lpv inject", shaders::LPV_INJECT_COMP, &[set.layout], 0, &spec)?;
+        let resolve = step("lpv resolve", shaders::LPV_RESOLVE_COMP, &binds)?;
         Ok(LpvInjectPass {
             frame: frame.clone(),
             maps: maps.clone(),
             vols: vols.clone(),
             queue,
-            pipeline,
-            set,
+            clear,
+            inject,
+            resolve,
             _sampler: sampler,
         })
     }
@@ -126,16 +157,28 @@ impl Pass for LpvInjectPass {
             self.maps.colors().into_iter().map(|i| Use::image(i, Access::ComputeShaderReadSampled)).collect();
         let written = v.light[0].iter().chain(std::iter::once(&v.geometry)).chain(v.sum.iter());
         uses.extend(written.map(|i| Use::overwrite(i, Access::ComputeShaderWrite)));
+        uses.push(Use::buffer(&v.accum, Access::ComputeShaderWrite));
         uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
         uses
     }
     fn queue(&self) -> QueueKind {
         self.queue
     }
-    fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let r = self.vols.grid.resolution;
-        self.pipeline.bind(cmd, &[self.set.set]);
-        self.pipeline.dispatch(cmd, [r, r, r], [4, 4, 4]);
+        let rw = [Access::ComputeShaderWrite];
+        let (p, set) = &self.clear;
+        p.bind(cmd, &[set.set]);
+        p.dispatch(cmd, [r, r, r], [4, 4, 4]);
+        super::memory_barrier(ctx, cmd, &rw, &rw);
+        let (p, set) = &self.inject;
+        let size = self.maps.flux.extent2d();
+        p.bind(cmd, &[set.set]);
+        p.dispatch(cmd, [size.width, size.height, self.maps.views.len() as u32], [8, 8, 1]);
+        super::memory_barrier(ctx, cmd, &rw, &rw);
+        let (p, set) = &self.resolve;
+        p.bind(cmd, &[set.set]);
+        p.dispatch(cmd, [r, r, r], [4, 4, 4]);
     }
 }
 
