@@ -34,6 +34,10 @@ impl Stats {
     }
 }
 
+fn vct() -> String {
+    "vct".to_owned()
+}
+
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Report {
@@ -44,6 +48,9 @@ pub struct Report {
     pub scenario: String,
     pub width: u32,
     pub height: u32,
+    /// `gi.mode` ("vct" in reports from before it was recorded).
+    #[serde(default = "vct")]
+    pub gi_mode: String,
     pub voxel_resolution: u32,
     pub frames: u32,
     pub warmup: u32,

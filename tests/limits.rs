@@ -28,7 +28,7 @@ fn memory_estimate_matches_what_is_allocated() {
         ("cornell 64^3", vec![("gi.voxel_resolution", "64")]),
         ("glossy, 2 bounces, cone shadows, 1/2 res", vec![("gi.voxel_resolution", "64"), ("gi.bounces", "2")]),
         ("rsm, 6 faces of 256^2, 1/2 res", vec![("gi.mode", "\"rsm\""), ("gi.downsample", "2")]),
-        ("lpv 32^3, 6 faces of 256^2", vec![("gi.mode", "\"lpv\"")]),
+        ("lpv 16^3, 6 faces of 256^2", vec![("gi.mode", "\"lpv\"")]),
     ] {
         let mut scene = cornell(&o);
         if label.starts_with("glossy") {

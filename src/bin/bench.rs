@@ -171,6 +171,10 @@ fn run(args: Args) -> dvsgi::Result<()> {
         scenario: format!("{:?}", args.scenario).to_lowercase(),
         width: scene.settings.width,
         height: scene.settings.height,
+        gi_mode: serde_json::to_value(scene.settings.gi.mode)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_owned))
+            .unwrap_or_default(),
         voxel_resolution: scene.settings.gi.voxel_resolution,
         frames: args.frames,
         warmup: args.warmup,
@@ -234,12 +238,13 @@ fn print_table(ctx: &Context, r: &Report) {
     if !r.device.separate_queues {
         outln!("note: one queue — the async modes submit both streams to it, so they cannot overlap here");
     }
+    let gi = if r.gi_mode == "vct" { format!("vct, voxels {}³", r.voxel_resolution) } else { r.gi_mode.clone() };
     outln!(
-        "scene: {}  {}x{}  voxels {}³  {} scenario  {} frames (+{} warm-up), {} in flight",
+        "scene: {}  {}x{}  gi {}  {} scenario  {} frames (+{} warm-up), {} in flight",
         r.scene,
         r.width,
         r.height,
-        r.voxel_resolution,
+        gi,
         r.scenario,
         r.frames,
         r.warmup,

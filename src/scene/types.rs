@@ -534,9 +534,9 @@ impl Default for GiSettings {
             update_interval: 1,
             rsm_size: 256,
             rsm_samples: 128,
-            rsm_radius: 0.25,
-            lpv_resolution: 32,
-            lpv_steps: 8,
+            rsm_radius: 1.42,
+            lpv_resolution: 16,
+            lpv_steps: 16,
             lpv_occlusion: true,
         }
     }
