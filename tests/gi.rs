@@ -45,26 +45,7 @@ fn gi_bleeds_colour_onto_white_surfaces_near_the_coloured_walls() {
     let ctx = context();
     let (direct, scene) = render(&ctx, cornell("cornell-box.toml", &[("gi.mode", "\"none\"")]));
     let (gi, _) = render(&ctx, cornell("cornell-box.toml", &[]));
-    let seen = classify(&scene);
-    // The red wall is at x = 0.55 m (left in the image), the green one at x = 0 m.
-    let near =
-        |i: usize, wall_x: f32| matches!(&seen[i], Some((m, p, _)) if m == "white" && (p.x - wall_x).abs() < 0.15);
-    let (d_red, n) = sum_where(&direct, |i| near(i, 0.55));
-    let (g_red, _) = sum_where(&gi, |i| near(i, 0.55));
-    assert!(n > 50, "only {n} white pixels near the red wall");
-    let (d_green, _) = sum_where(&direct, |i| near(i, 0.0));
-    let (g_green, _) = sum_where(&gi, |i| near(i, 0.0));
-    let red = |v: Vec3| v.x / v.y;
-    let green = |v: Vec3| v.y / v.x;
-    assert!(red(g_red) > 1.05 * red(d_red), "near the red wall R/G: GI {} vs direct {}", red(g_red), red(d_red));
-    assert!(
-        green(g_green) > 1.05 * green(d_green),
-        "near the green wall G/R: GI {} vs direct {}",
-        green(g_green),
-        green(d_green)
-    );
-    // GI only adds light.
-    assert!(g_red.min_element() > d_red.min_element());
+    assert_colour_bleeding(&scene, &direct, &gi, "cone tracing");
 }
 
 /// The AO view is darker where the back wall meets the floor than in the middle of the back

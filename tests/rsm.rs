@@ -158,28 +158,7 @@ fn rsm_bleeds_colour_onto_white_surfaces_near_the_coloured_walls() {
     let ctx = context();
     let (direct, scene) = render(&ctx, cornell(&[("gi.mode", "\"none\"")]));
     let (gi, _) = render(&ctx, cornell(&[]));
-    let tris = triangles(&scene, 0.0);
-    let near = |i: usize, wall_x: f32| {
-        let (o, d) = camera_ray(&scene, i as u32 % 64, i as u32 / 64);
-        raycast(&tris, o, d, 1e-4, 1e4).is_some_and(|(t, k)| {
-            scene.materials[tris[k].material as usize].name == "white" && ((o + d * t).x - wall_x).abs() < 0.15
-        })
-    };
-    let (d_red, n) = sum_where(&direct, |i| near(i, 0.55));
-    let (g_red, _) = sum_where(&gi, |i| near(i, 0.55));
-    assert!(n > 50, "only {n} white pixels near the red wall");
-    let (d_green, _) = sum_where(&direct, |i| near(i, 0.0));
-    let (g_green, _) = sum_where(&gi, |i| near(i, 0.0));
-    let red = |v: Vec3| v.x / v.y;
-    let green = |v: Vec3| v.y / v.x;
-    assert!(red(g_red) > 1.05 * red(d_red), "near the red wall R/G: RSM {} vs direct {}", red(g_red), red(d_red));
-    assert!(
-        green(g_green) > 1.05 * green(d_green),
-        "near the green wall G/R: {} vs {}",
-        green(g_green),
-        green(d_green)
-    );
-    assert!(g_red.min_element() > d_red.min_element(), "RSM light only adds light");
+    assert_colour_bleeding(&scene, &direct, &gi, "RSM");
 }
 
 /// The RSM images and the gathered light as floats.

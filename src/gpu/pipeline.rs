@@ -432,6 +432,12 @@ impl Pipeline {
         }
     }
 
+    /// One invocation per pixel of `image` in 8x8 groups: the per-pixel compute passes.
+    pub fn dispatch_pixels(&self, cmd: vk::CommandBuffer, image: &crate::gpu::Image) {
+        let e = image.extent2d();
+        self.dispatch(cmd, [e.width, e.height, 1], [8, 8, 1]);
+    }
+
     /// Dispatch enough workgroups of `local_size` (the shader's local_size_x/y/z) to cover
     /// `items` invocations in each dimension, rounding up.
     pub fn dispatch(&self, cmd: vk::CommandBuffer, items: [u32; 3], local_size: [u32; 3]) {

@@ -274,3 +274,29 @@ pub fn quad(c: Vec3, u: Vec3, v: Vec3, n: Vec3) -> [[Vec3; 3]; 2] {
         [[a, cc, b], [a, d, cc]]
     }
 }
+
+/// Colour bleeding in the McGuire Cornell box: white surfaces within 15 cm of the red wall
+/// (x = 0.55 m, left in the image) are at least 5% redder with the indirect light than with
+/// direct light alone, those near the green wall (x = 0) 5% greener, and the indirect light
+/// only adds light.
+pub fn assert_colour_bleeding(scene: &Scene, direct: &FrameOutput, gi: &FrameOutput, what: &str) {
+    let tris = triangles(scene, 0.0);
+    let w = scene.settings.width;
+    let near = |i: usize, wall_x: f32| {
+        let (o, d) = camera_ray(scene, i as u32 % w, i as u32 / w);
+        raycast(&tris, o, d, 1e-4, 1e4).is_some_and(|(t, k)| {
+            scene.materials[tris[k].material as usize].name == "white" && ((o + d * t).x - wall_x).abs() < 0.15
+        })
+    };
+    let (d_red, n) = sum_where(direct, |i| near(i, 0.55));
+    let (g_red, _) = sum_where(gi, |i| near(i, 0.55));
+    assert!(n > 50, "only {n} white pixels near the red wall");
+    let (d_green, _) = sum_where(direct, |i| near(i, 0.0));
+    let (g_green, _) = sum_where(gi, |i| near(i, 0.0));
+    let red = |v: Vec3| v.x / v.y;
+    let green = |v: Vec3| v.y / v.x;
+    assert!(red(g_red) > 1.05 * red(d_red), "{what}: near the red wall R/G {} vs direct {}", red(g_red), red(d_red));
+    let (gg, dg) = (green(g_green), green(d_green));
+    assert!(gg > 1.05 * dg, "{what}: near the green wall G/R {gg} vs direct {dg}");
+    assert!(g_red.min_element() > d_red.min_element(), "{what} only adds light");
+}

@@ -59,6 +59,14 @@ impl GBuffer {
                 .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE),
         )
     }
+    /// The depth and normal that a per-pixel compute pass reads to place its pixel's surface.
+    pub fn surface_reads(&self) -> [Use<'_>; 2] {
+        [
+            Use::image(&self.depth, Access::ComputeShaderReadDepth),
+            Use::image(&self.normal, Access::ComputeShaderReadSampled),
+        ]
+    }
+
     pub fn colors(&self) -> [&Arc<Image>; 4] {
         [&self.albedo, &self.normal, &self.specular, &self.emission]
     }

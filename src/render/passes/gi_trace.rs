@@ -162,13 +162,9 @@ impl Pass for GiTracePass {
         "cone trace"
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        let g = &self.gbuffer;
-        let mut uses = vec![
-            Use::image(&g.depth, Access::ComputeShaderReadDepth),
-            Use::image(&g.normal, Access::ComputeShaderReadSampled),
-            Use::image(&g.specular, Access::ComputeShaderReadSampled),
-            Use::image(&self.lod0, Access::ComputeShaderReadSampled),
-        ];
+        let mut uses = self.gbuffer.surface_reads().to_vec();
+        uses.push(Use::image(&self.gbuffer.specular, Access::ComputeShaderReadSampled));
+        uses.push(Use::image(&self.lod0, Access::ComputeShaderReadSampled));
         uses.extend(self.volumes.directional.iter().map(|d| Use::image(d, Access::ComputeShaderReadSampled)));
         uses.extend(self.targets.uses(&self.placeholders, Access::ComputeShaderWrite));
         uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
@@ -178,9 +174,8 @@ impl Pass for GiTracePass {
         QueueKind::Compute
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        let e = self.targets.diffuse.extent2d();
         self.pipeline.bind(cmd, &[self.set.set]);
-        self.pipeline.dispatch(cmd, [e.width, e.height, 1], [8, 8, 1]);
+        self.pipeline.dispatch_pixels(cmd, &self.targets.diffuse);
     }
 }
 
@@ -252,11 +247,7 @@ impl Pass for GiUpsamplePass {
         "gi upsample"
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        let g = &self.gbuffer;
-        let mut uses = vec![
-            Use::image(&g.depth, Access::ComputeShaderReadDepth),
-            Use::image(&g.normal, Access::ComputeShaderReadSampled),
-        ];
+        let mut uses = self.gbuffer.surface_reads().to_vec();
         uses.extend(self.low.uses(&self.placeholders, Access::ComputeShaderReadStorage));
         uses.extend(self.targets.uses(&self.placeholders, Access::ComputeShaderWrite));
         uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
@@ -266,9 +257,8 @@ impl Pass for GiUpsamplePass {
         QueueKind::Compute
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        let e = self.targets.diffuse.extent2d();
         self.pipeline.bind(cmd, &[self.set.set]);
-        self.pipeline.dispatch(cmd, [e.width, e.height, 1], [8, 8, 1]);
+        self.pipeline.dispatch_pixels(cmd, &self.targets.diffuse);
     }
 }
 
@@ -311,8 +301,7 @@ impl Pass for GiAddPass {
         QueueKind::Compute
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        let e = self.targets.diffuse.extent2d();
         self.pipeline.bind(cmd, &[self.set.set]);
-        self.pipeline.dispatch(cmd, [e.width, e.height, 1], [8, 8, 1]);
+        self.pipeline.dispatch_pixels(cmd, &self.targets.diffuse);
     }
 }

@@ -291,12 +291,8 @@ impl Pass for LpvLookupPass {
         "lpv lookup"
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        let g = &self.gbuffer;
-        let mut uses = vec![
-            Use::image(&g.depth, Access::ComputeShaderReadDepth),
-            Use::image(&g.normal, Access::ComputeShaderReadSampled),
-            Use::overwrite(&self.targets.diffuse, Access::ComputeShaderWrite),
-        ];
+        let mut uses = vec![Use::overwrite(&self.targets.diffuse, Access::ComputeShaderWrite)];
+        uses.extend(self.gbuffer.surface_reads());
         uses.extend(self.vols.sum.iter().map(|i| Use::image(i, Access::ComputeShaderReadSampled)));
         uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
         uses
@@ -305,8 +301,7 @@ impl Pass for LpvLookupPass {
         self.queue
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        let e = self.targets.diffuse.extent2d();
         self.pipeline.bind(cmd, &[self.set.set]);
-        self.pipeline.dispatch(cmd, [e.width, e.height, 1], [8, 8, 1]);
+        self.pipeline.dispatch_pixels(cmd, &self.targets.diffuse);
     }
 }

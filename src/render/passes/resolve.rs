@@ -37,8 +37,7 @@ impl Pass for ResolvePass {
         ]
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        let e = self.resolved.extent2d();
         self.pipeline.bind(cmd, &[self.set.set]);
-        self.pipeline.dispatch(cmd, [e.width, e.height, 1], [8, 8, 1]);
+        self.pipeline.dispatch_pixels(cmd, &self.resolved);
     }
 }

@@ -236,12 +236,8 @@ impl Pass for RsmGatherPass {
         "rsm gather"
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        let g = &self.gbuffer;
-        let mut uses = vec![
-            Use::image(&g.depth, Access::ComputeShaderReadDepth),
-            Use::image(&g.normal, Access::ComputeShaderReadSampled),
-            Use::overwrite(&self.targets.diffuse, Access::ComputeShaderWrite),
-        ];
+        let mut uses = vec![Use::overwrite(&self.targets.diffuse, Access::ComputeShaderWrite)];
+        uses.extend(self.gbuffer.surface_reads());
         uses.extend(self.maps.colors().map(|i| Use::image(i, Access::ComputeShaderReadSampled)));
         uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
         uses
@@ -250,8 +246,7 @@ impl Pass for RsmGatherPass {
         QueueKind::Compute
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        let e = self.targets.diffuse.extent2d();
         self.pipeline.bind(cmd, &[self.set.set]);
-        self.pipeline.dispatch(cmd, [e.width, e.height, 1], [8, 8, 1]);
+        self.pipeline.dispatch_pixels(cmd, &self.targets.diffuse);
     }
 }

@@ -47,8 +47,7 @@ impl Pass for TonemapPass {
         uses
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        let e = self.display.extent2d();
         self.pipeline.bind(cmd, &[self.set.set]);
-        self.pipeline.dispatch(cmd, [e.width, e.height, 1], [8, 8, 1]);
+        self.pipeline.dispatch_pixels(cmd, &self.display);
     }
 }
