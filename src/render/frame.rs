@@ -79,6 +79,37 @@ pub struct LpvPasses {
     pub lookup: LpvLookupPass,
 }
 
+impl LpvPasses {
+    /// The volume of `gi.mode = "lpv"`, or the far field of `"rsm+lpv"` (which sums only the
+    /// light that has travelled `MIX_SPLIT_CELLS` cells, on the graphics queue beside the
+    /// gather on compute, as in the async-compute study).
+    fn new(
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        frame: &FrameBuffers,
+        gbuffer: &Arc<GBuffer>,
+        maps: &Arc<RsmMaps>,
+        params: &Buffer,
+        low: GiTargets,
+    ) -> GpuResult<LpvPasses> {
+        let gi = &scene.settings.gi;
+        let mix = gi.mode == GiMode::RsmLpv;
+        let skipped = if mix { crate::render::lpv::MIX_SPLIT_CELLS } else { 0 };
+        let q = if mix { QueueKind::Graphics } else { QueueKind::Compute };
+        let quanta = crate::render::lpv::quanta(scene, maps.views.len());
+        let grid = crate::render::lpv::grid(scene);
+        let volumes = Arc::new(LpvVolumes::new(ctx, grid, gi.lpv_occlusion, skipped, quanta)?);
+        let propagate =
+            (gi.lpv_steps > 0).then(|| LpvPropagatePass::new(ctx, &volumes, gi.lpv_steps, q)).transpose()?;
+        Ok(LpvPasses {
+            inject: LpvInjectPass::new(ctx, frame, maps, &volumes, q)?,
+            propagate,
+            lookup: LpvLookupPass::new(ctx, frame, gbuffer, &volumes, params, low, q)?,
+            volumes,
+        })
+    }
+}
+
 /// The techniques built on reflective shadow maps (`gi.mode = "rsm"`, `"lpv"` or
 /// `"rsm+lpv"`): the maps of every shadowed light, then the per-pixel RSM gather and/or the
 /// light propagation volume (their sum for the mix), and the upsample when working at reduced
@@ -94,7 +125,7 @@ pub struct RsmPasses {
     /// Only with `gi.downsample` > 1.
     pub upsample: Option<GiUpsamplePass>,
     /// The downsampling factor for the gather, the lookup and the upsample (`GiParams`).
-    _params: Buffer,
+    params: Buffer,
 }
 
 impl RsmPasses {
@@ -125,19 +156,8 @@ impl RsmPasses {
         let grid = crate::render::lpv::grid(scene);
         let split = crate::render::lpv::MIX_SPLIT_CELLS;
         let lpv = if gi.uses_lpv() {
-            let skipped = if mix { split } else { 0 };
-            // The study's mix: the volume on the graphics queue beside the gather on compute.
-            let q = if mix { QueueKind::Graphics } else { QueueKind::Compute };
-            let quanta = crate::render::lpv::quanta(scene, maps.views.len());
-            let volumes = Arc::new(LpvVolumes::new(ctx, grid, gi.lpv_occlusion, skipped, quanta)?);
-            let propagate =
-                (gi.lpv_steps > 0).then(|| LpvPropagatePass::new(ctx, &volumes, gi.lpv_steps, q)).transpose()?;
-            Some(LpvPasses {
-                inject: LpvInjectPass::new(ctx, frame, &maps, &volumes, q)?,
-                propagate,
-                lookup: LpvLookupPass::new(ctx, frame, gbuffer, &volumes, &params, low("lpv")?, q)?,
-                volumes,
-            })
+            let low = low("lpv")?;
+            Some(LpvPasses::new(ctx, scene, frame, gbuffer, &maps, &params, low)?)
         } else {
             None
         };
@@ -156,17 +176,11 @@ impl RsmPasses {
             GiMode::RsmLpv => "rsm+lpv",
             _ => "rsm",
         };
-        let mut passes = RsmPasses {
-            render: RsmPass::new(ctx, scene_gpu, frame, &maps)?,
-            gather,
-            lpv,
-            add,
-            upsample: None,
-            _params: params,
-        };
+        let mut passes =
+            RsmPasses { render: RsmPass::new(ctx, scene_gpu, frame, &maps)?, gather, lpv, add, upsample: None, params };
         if k > 1 {
             let full = GiTargets::new(ctx, &format!(" ({what})"), width, height, false, false)?;
-            let up = GiUpsamplePass::new(ctx, frame, gbuffer, &passes._params, passes.low(), full, placeholders)?;
+            let up = GiUpsamplePass::new(ctx, frame, gbuffer, &passes.params, passes.low(), full, placeholders)?;
             passes.upsample = Some(up);
         }
         Ok(Some(passes))
