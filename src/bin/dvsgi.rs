@@ -665,7 +665,7 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
         let settings = common.settings();
         let from = if settings.is_empty() { String::new() } else { format!(" (with {})", settings.join(" ")) };
         outln!("  [gi]{from}:");
-        match toml::to_string(&scene.settings.gi) {
+        match gi_table(&scene.settings.gi) {
             Ok(t) => t.lines().for_each(|l| outln!("    {l}")),
             Err(e) => outln!("    (cannot show: {e})"),
         }
@@ -736,4 +736,20 @@ fn schedule_line(ctx: &Context, mode: Mode) -> String {
         Mode::Sync => "sync (everything on the graphics queue)".to_string(),
         _ => format!("{mode}, {}", ctx.topology.describe()),
     }
+}
+
+/// The `[gi]` table as TOML in the struct's order, its f32 values written as the shortest
+/// decimals that read back to them (1.42, not the f64 widening 1.4199999570846558).
+fn gi_table(gi: &dvsgi::scene::GiSettings) -> Result<String, toml::ser::Error> {
+    let shortest = |line: &str| -> Option<String> {
+        let (key, value) = line.split_once(" = ")?;
+        if !value.contains('.') {
+            return None;
+        }
+        let f = value.parse::<f64>().ok()? as f32;
+        let text = f.to_string();
+        Some(format!("{key} = {text}{}", if text.contains(['.', 'e', 'N', 'i']) { "" } else { ".0" }))
+    };
+    let text = toml::to_string(gi)?;
+    Ok(text.lines().map(|l| shortest(l).unwrap_or_else(|| l.to_owned()) + "\n").collect())
 }
