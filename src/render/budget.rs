@@ -126,19 +126,25 @@ impl Estimate {
 
     /// `check` against given limits.
     pub fn check_limits(&self, scene: &Scene, info: &Limits) -> GpuResult<()> {
-        let res = scene.settings.gi.voxel_resolution;
-        let lower = if self.volumes > 0 {
+        let gi = &scene.settings.gi;
+        let lpv = gi.uses_lpv() && matches!(scene.settings.view, View::Final | View::Indirect | View::Ao);
+        let res = if lpv { gi.lpv_resolution } else { gi.voxel_resolution };
+        let volumes = if lpv { "propagation volumes" } else { "voxel volumes" };
+        let rsm = if gi.uses_rsm() { format!(", gi.rsm_size ({} now)", gi.rsm_size) } else { String::new() };
+        let lower = if lpv {
+            format!("; lower gi.lpv_resolution ({res} now){rsm} or the image size")
+        } else if self.volumes > 0 {
             let mut fits = res / 2;
             while fits > 8 && self.with_resolution(scene, fits) > info.heap {
                 fits /= 2;
             }
             format!("; lower gi.voxel_resolution ({res} now, {fits} fits), gi.bounces or the image size")
         } else {
-            "; lower the image size or render.shadow_map_size".to_owned()
+            format!("; lower the image size{rsm} or render.shadow_map_size")
         };
         if info.heap > 0 && self.total() > info.heap {
             return Err(GpuError::Limit(format!(
-                "{}: the frame needs about {} of GPU memory (voxel volumes {} at {res}^3, targets {}, shadow maps {}, \
+                "{}: the frame needs about {} of GPU memory ({volumes} {} at {res}^3, targets {}, shadow maps {}, \
                  scene {}), more than {}'s largest device-local memory heap ({}){lower}",
                 scene.path.display(),
                 mib(self.total()),
@@ -152,7 +158,8 @@ impl Estimate {
         }
         if info.max_allocation > 0 && self.largest_volume > info.max_allocation {
             return Err(GpuError::Limit(format!(
-                "{}: a {res}^3 voxel volume needs {} in one allocation, more than {}'s maxMemoryAllocationSize ({}){lower}",
+                "{}: one of the {res}^3 {volumes} needs {} in one allocation, more than {}'s \
+                 maxMemoryAllocationSize ({}){lower}",
                 scene.path.display(),
                 mib(self.largest_volume),
                 info.device,
@@ -231,5 +238,30 @@ mod tests {
         assert!(e.check_limits(&scene, &lim(0, 0)).is_ok(), "unknown limits are not checked");
         scene.settings.gi.voxel_resolution = 256;
         assert!(Estimate::of(&scene).check_limits(&scene, &lim(2 << 30, 2 << 30)).is_ok());
+    }
+
+    /// Reflective shadow maps and propagation volumes count, and a refusal names their keys.
+    #[test]
+    fn rsm_maps_and_propagation_volumes_are_counted_and_named() {
+        let point = crate::scene::LightKind::Point { position: glam::Vec3::ONE, intensity: glam::Vec3::ONE };
+        let mut scene = crate::render::test_scene(vec![point]);
+        scene.lights[0].cast_shadows = true;
+        scene.settings.gi.mode = GiMode::Lpv;
+        scene.settings.gi.lpv_resolution = 128;
+        scene.settings.gi.rsm_size = 2048;
+        let e = Estimate::of(&scene);
+        // Ten RGBA32F volumes and the injection's 16 ints per cell, each 32 MiB at 128^3.
+        assert_eq!(e.volumes, 14 * 16 * 128u64.pow(3));
+        assert_eq!(e.largest_volume, 16 * 128u64.pow(3));
+        // Six cube faces of 2048^2 flux, normal, position and depth texels (44 bytes).
+        assert!(e.shadow_maps >= 6 * 44 * 2048u64.pow(2), "{}", e.shadow_maps);
+        let lim = Limits { device: "small", heap: 1 << 30, max_allocation: 0 };
+        let err = e.check_limits(&scene, &lim).unwrap_err().to_string();
+        for part in ["propagation volumes", "128^3", "lower gi.lpv_resolution (128 now)", "gi.rsm_size (2048 now)"] {
+            assert!(err.contains(part), "{part:?} missing from: {err}");
+        }
+        scene.settings.gi.mode = GiMode::Rsm;
+        let err = Estimate::of(&scene).check_limits(&scene, &lim).unwrap_err().to_string();
+        assert!(err.contains("gi.rsm_size (2048 now)") && !err.contains("lpv"), "{err}");
     }
 }
