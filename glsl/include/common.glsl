@@ -27,4 +27,14 @@ vec3 safe_normalize(vec3 v, vec3 fallback) {
     return (l2 > 1e-30 && !isinf(l2)) ? v * inversesqrt(l2) : fallback;
 }
 
+// An orthonormal basis around unit n (Duff et al. 2017).
+mat3 tangent_frame(vec3 n) {
+    float s = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (s + n.z);
+    float b = n.x * n.y * a;
+    vec3 t = vec3(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
+    vec3 bt = vec3(b, s + n.y * n.y * a, -n.y);
+    return mat3(t, bt, n);
+}
+
 #endif

@@ -122,16 +122,6 @@ ConeResult trace_cone(ConeOrigin o, vec3 dir, float tan_half, float max_t) {
     return r;
 }
 
-// An orthonormal basis around unit n (Duff et al. 2017).
-mat3 tangent_frame(vec3 n) {
-    float s = n.z >= 0.0 ? 1.0 : -1.0;
-    float a = -1.0 / (s + n.z);
-    float b = n.x * n.y * a;
-    vec3 t = vec3(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
-    vec3 bt = vec3(b, s + n.y * n.y * a, -n.y);
-    return mat3(t, bt, n);
-}
-
 // Diffuse cones over the hemisphere of the origin's normal: the cosine-weighted
 // mean incoming radiance (irradiance / pi) in rgb and the AO factor (1 = unoccluded) in a.
 vec4 trace_diffuse(ConeOrigin o) {
