@@ -70,7 +70,7 @@ pub struct ConePasses {
     pub upsample: Option<GiUpsamplePass>,
 }
 
-/// The light propagation volume's passes (`gi.mode = "lpv"`).
+/// The light propagation volume's passes (`gi.mode = "lpv"` or `"rsm+lpv"`).
 pub struct LpvPasses {
     pub volumes: Arc<LpvVolumes>,
     pub inject: LpvInjectPass,
@@ -116,9 +116,9 @@ impl LpvPasses {
 /// resolution.
 pub struct RsmPasses {
     pub render: RsmPass,
-    /// `gi.mode = "rsm"`.
+    /// `gi.mode = "rsm"` or `"rsm+lpv"`.
     pub gather: Option<RsmGatherPass>,
-    /// `gi.mode = "lpv"`.
+    /// `gi.mode = "lpv"` or `"rsm+lpv"`.
     pub lpv: Option<LpvPasses>,
     /// `gi.mode = "rsm+lpv"`: the gather's near field plus the volume's far field.
     pub add: Option<GiAddPass>,
