@@ -307,17 +307,7 @@ fn scene_of(tris: &[[Vec3; 3]], normal: Option<Vec3>) -> Scene {
         name: "extremes".into(),
         meshes: vec![],
         objects: vec![],
-        materials: vec![Material {
-            name: "grey".into(),
-            albedo: Vec3::splat(0.5),
-            albedo_texture: None,
-            mask_texture: None,
-            normal_texture: None,
-            bump_scale: 1.0,
-            specular: Vec3::ZERO,
-            shininess: 1.0,
-            emission: Vec3::ZERO,
-        }],
+        materials: vec![Material::diffuse("grey", Vec3::splat(0.5))],
         textures: vec![],
         camera: Camera {
             position: Vec3::new(0.3, 2.0, 1.5),

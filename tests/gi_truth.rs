@@ -194,17 +194,7 @@ fn flat_faces_have_no_stripes() {
 }
 
 fn material(name: &str, albedo: f32, emission: Vec3) -> Material {
-    Material {
-        name: name.into(),
-        albedo: Vec3::splat(albedo),
-        albedo_texture: None,
-        mask_texture: None,
-        normal_texture: None,
-        bump_scale: 1.0,
-        specular: Vec3::ZERO,
-        shininess: 1.0,
-        emission,
-    }
+    Material { emission, ..Material::diffuse(name, Vec3::splat(albedo)) }
 }
 
 /// The inside of a cube of side 1 around the origin, normals inward.

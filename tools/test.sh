@@ -13,9 +13,11 @@ cargo build --locked -p dvsgi-split-queues
 cargo test --locked "$@"
 cargo test --locked -p dvsgi-split-queues "$@"
 for order in compute-first graphics-first; do
-  echo "test.sh: the schedule tests, synchronization validation and bench on the split device ($order)"
+  echo "test.sh: the schedule tests (cone tracing, RSM, LPV, the mix), synchronization validation and bench on the split device ($order)"
   export DVSGI_SPLIT_QUEUES_ORDER="$order"
   tools/with-split-queues.sh cargo test --locked "$@" --test schedule
+  tools/with-split-queues.sh cargo test --locked "$@" --test rsm -- \
+    every_mode_renders_the_same_rsm_and_lpv_image the_mix_puts_the_gather_on_compute_and_the_volume_on_graphics
   tools/with-split-queues.sh cargo test --locked "$@" --test cli --test bench -- \
     every_schedule_is_clean_under_queue_submit_synchronization_validation \
     info_reports_device_and_queue_topology bench_smoke

@@ -102,7 +102,7 @@ impl LpvPasses {
         let propagate =
             (gi.lpv_steps > 0).then(|| LpvPropagatePass::new(ctx, &volumes, gi.lpv_steps, q)).transpose()?;
         Ok(LpvPasses {
-            inject: LpvInjectPass::new(ctx, frame, maps, &volumes, q)?,
+            inject: LpvInjectPass::new(ctx, maps, &volumes, q)?,
             propagate,
             lookup: LpvLookupPass::new(ctx, frame, gbuffer, &volumes, params, low, q)?,
             volumes,

@@ -95,7 +95,6 @@ fn storage<'a>(images: &[Arc<Image>]) -> Vec<Bind<'a>> {
 /// (fixed-point integer atomics), then the sums become the volumes. Three dispatches: clear
 /// the accumulator, add the texels, resolve.
 pub struct LpvInjectPass {
-    frame: FrameBuffers,
     maps: Arc<RsmMaps>,
     vols: Arc<LpvVolumes>,
     queue: QueueKind,
@@ -106,13 +105,7 @@ pub struct LpvInjectPass {
 }
 
 impl LpvInjectPass {
-    pub fn new(
-        ctx: &Arc<Context>,
-        frame: &FrameBuffers,
-        maps: &Arc<RsmMaps>,
-        vols: &Arc<LpvVolumes>,
-        queue: QueueKind,
-    ) -> GpuResult<Self> {
+    pub fn new(ctx: &Arc<Context>, maps: &Arc<RsmMaps>, vols: &Arc<LpvVolumes>, queue: QueueKind) -> GpuResult<Self> {
         let sampler = GBuffer::sampler(ctx)?;
         let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let stage = vk::ShaderStageFlags::COMPUTE;
@@ -134,16 +127,7 @@ impl LpvInjectPass {
         binds.push(Bind::StorageImage(vols.geometry.view));
         binds.extend(storage(&vols.sum));
         let resolve = step("lpv resolve", shaders::LPV_RESOLVE_COMP, &binds)?;
-        Ok(LpvInjectPass {
-            frame: frame.clone(),
-            maps: maps.clone(),
-            vols: vols.clone(),
-            queue,
-            clear,
-            inject,
-            resolve,
-            _sampler: sampler,
-        })
+        Ok(LpvInjectPass { maps: maps.clone(), vols: vols.clone(), queue, clear, inject, resolve, _sampler: sampler })
     }
 }
 
@@ -158,7 +142,6 @@ impl Pass for LpvInjectPass {
         let written = v.light[0].iter().chain(std::iter::once(&v.geometry)).chain(v.sum.iter());
         uses.extend(written.map(|i| Use::overwrite(i, Access::ComputeShaderWrite)));
         uses.push(Use::buffer(&v.accum, Access::ComputeShaderWrite));
-        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
         uses
     }
     fn queue(&self) -> QueueKind {
