@@ -27,27 +27,13 @@ bool has(int tex) {
     return tex >= 0 && uint(tex) < TEXTURE_COUNT;
 }
 
-// The shading normal bent by the material's normal or height map (explicit gradients: the
-// derivatives are taken before any fragment of the quad is discarded).
+// The shading normal bent by the material's normal or height map (material.glsl: level 0, the
+// same as the path tracer's), in the pixel's UV frame.
 vec3 bent_normal(Material m, vec3 n, vec3 ng, vec3 dpdx, vec3 dpdy, vec2 duvdx, vec2 duvdy) {
     int tex = m.texture.z;
     if (!has(tex) || m.texture.w == 0) return n;
     UvFrame f = uv_frame(dpdx, dpdy, duvdx, duvdy);
-    vec3 p = n;
-    if (m.texture.w == NORMAL_MAP) {
-        p = normal_from_map(n, f, textureGrad(SCENE_TEXTURE(tex), v_uv, duvdx, duvdy).rgb);
-    } else if (m.texture.w == HEIGHT_MAP) {
-        // Central differences one texel apart at the level the footprint selects.
-        vec2 size = vec2(textureSize(SCENE_TEXTURE(tex), 0));
-        float lod = max(log2(max(length(duvdx * size), length(duvdy * size))), 0.0);
-        vec2 d = exp2(lod) / size;
-        float hu = textureLod(SCENE_TEXTURE(tex), v_uv + vec2(d.x, 0.0), lod).a
-                 - textureLod(SCENE_TEXTURE(tex), v_uv - vec2(d.x, 0.0), lod).a;
-        float hv = textureLod(SCENE_TEXTURE(tex), v_uv + vec2(0.0, d.y), lod).a
-                 - textureLod(SCENE_TEXTURE(tex), v_uv - vec2(0.0, d.y), lod).a;
-        p = normal_from_height(n, f, vec2(hu, hv) / (2.0 * d), m.emission.a);
-    }
-    return keep_facing(p, n, ng);
+    return keep_facing(mapped_normal(textures[tex], texture_sampler, m.texture.w, n, f, v_uv, m.emission.a), n, ng);
 }
 
 void main() {

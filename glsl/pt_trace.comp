@@ -117,14 +117,6 @@ vec4 texel(int tex, vec2 uv) {
     return c;
 }
 
-ivec2 texture_size(int tex) {
-    ivec2 s = ivec2(1);
-    [[dont_unroll]] for (uint i = 0u; i < TEXTURE_COUNT; ++i) {
-        if (i == uint(tex)) s = textureSize(SCENE_TEXTURE(i), 0);
-    }
-    return s;
-}
-
 vec2 hit_uv(TriShade sh, vec2 b) {
     return sh.uv01.xy * (1.0 - b.x - b.y) + sh.uv01.zw * b.x + sh.uv2.xy * b.y;
 }
@@ -227,17 +219,16 @@ struct Surface {
     vec3 emission;
 };
 
-// The shading normal n bent by the material's normal or height map, in the triangle's own UV
-// frame, as gbuffer.frag does in a pixel's (level 0; a height map by central differences one
-// texel apart).
+// The shading normal n bent by the material's normal or height map (material.glsl: level 0, the
+// same as the G-buffer's), in the triangle's own UV frame. A uniform loop over the textures, as
+// texel() does.
 vec3 bent_normal(Material m, Tri tri, TriShade sh, vec2 uv, vec3 n) {
     UvFrame f = uv_frame(tri.e1.xyz, tri.e2.xyz, sh.uv01.zw - sh.uv01.xy, sh.uv2.xy - sh.uv01.xy);
-    int tex = m.texture.z;
-    if (m.texture.w == NORMAL_MAP) return normal_from_map(n, f, texel(tex, uv).rgb);
-    vec2 d = 1.0 / vec2(texture_size(tex));
-    float hu = texel(tex, uv + vec2(d.x, 0.0)).a - texel(tex, uv - vec2(d.x, 0.0)).a;
-    float hv = texel(tex, uv + vec2(0.0, d.y)).a - texel(tex, uv - vec2(0.0, d.y)).a;
-    return normal_from_height(n, f, vec2(hu, hv) / (2.0 * d), m.emission.a);
+    vec3 p = n;
+    [[dont_unroll]] for (uint i = 0u; i < TEXTURE_COUNT; ++i) {
+        if (i == uint(m.texture.z)) p = mapped_normal(textures[i], texture_sampler, m.texture.w, n, f, uv, m.emission.a);
+    }
+    return p;
 }
 
 // The surface at a hit, with the same material rules as the G-buffer (gbuffer.frag).

@@ -60,6 +60,48 @@ vec3 normal_from_height(vec3 n, UvFrame f, vec2 dh, float scale) {
     return dot(p, p) > 1e-30 ? normalize(p) : n;
 }
 
+// The maps that bend normals are read at level 0, bilinear, by every renderer alike, with the
+// filter written out (texel fetches: the same arithmetic in the fragment and compute stages,
+// whatever the sampler's anisotropy or the device's filtering precision). The bump is a
+// property of the surface point, as the map defines it at full resolution, not of the pixel or
+// the sample that looks at it: a height map differenced at the level a footprint selects has its
+// bumps flattened as pixels grow, so its strength followed the sampling density. Antialiasing
+// comes from averaging point values: supersampling in the rasterizer, jitter in the path tracer.
+
+// Texel i of level 0, wrapped (REPEAT) for i in -size..2 size - 1.
+vec4 fetch_repeat(texture2D t, sampler s, ivec2 size, ivec2 i) {
+    i += size * ivec2(lessThan(i, ivec2(0))) - size * ivec2(greaterThanEqual(i, size));
+    return texelFetch(sampler2D(t, s), i, 0);
+}
+
+// Level 0 of t at uv, bilinear with repeat (texel centres at (i + 0.5) / size).
+vec4 bilinear_level0(texture2D t, sampler s, vec2 uv) {
+    ivec2 size = textureSize(sampler2D(t, s), 0);
+    vec2 p = fract(uv) * vec2(size) - 0.5;
+    vec2 corner = floor(p);
+    vec2 f = p - corner;
+    ivec2 i = ivec2(corner);
+    vec4 below = mix(fetch_repeat(t, s, size, i), fetch_repeat(t, s, size, i + ivec2(1, 0)), f.x);
+    vec4 above = mix(fetch_repeat(t, s, size, i + ivec2(0, 1)), fetch_repeat(t, s, size, i + ivec2(1, 1)), f.x);
+    return mix(below, above, f.y);
+}
+
+// A height map's gradient (dh/du, dh/dv) per unit of UV at uv: central differences one texel
+// apart on level 0 (heights in alpha: render::scene_gpu::upload_texture).
+vec2 height_gradient(texture2D t, sampler s, vec2 uv) {
+    vec2 d = 1.0 / vec2(textureSize(sampler2D(t, s), 0));
+    float hu = bilinear_level0(t, s, uv + vec2(d.x, 0.0)).a - bilinear_level0(t, s, uv - vec2(d.x, 0.0)).a;
+    float hv = bilinear_level0(t, s, uv + vec2(0.0, d.y)).a - bilinear_level0(t, s, uv - vec2(0.0, d.y)).a;
+    return vec2(hu, hv) / (2.0 * d);
+}
+
+// The shading normal n bent by map t (sampler s) of kind `kind` (NORMAL_MAP or HEIGHT_MAP) at uv, in the
+// surface's UV frame f; `scale` is a height map's displacement in scene units per unit height.
+vec3 mapped_normal(texture2D t, sampler s, int kind, vec3 n, UvFrame f, vec2 uv, float scale) {
+    if (kind == NORMAL_MAP) return normal_from_map(n, f, bilinear_level0(t, s, uv).rgb);
+    return normal_from_height(n, f, height_gradient(t, s, uv), scale);
+}
+
 // A perturbed normal that turned away from the side the surface is seen from (ng) falls back
 // to the unperturbed one.
 vec3 keep_facing(vec3 perturbed, vec3 n, vec3 ng) {
