@@ -41,10 +41,13 @@ void main() {
         return;
     }
     vec3 P = world_position(frame, px, depth);
-    vec3 albedo = texelFetch(g_albedo, px, 0).rgb;
+    vec4 albedo_facing = texelFetch(g_albedo, px, 0);
+    vec3 albedo = albedo_facing.rgb;
     vec4 ns = texelFetch(g_normal, px, 0);
     vec3 N = safe_normalize(ns.xyz, vec3(0.0, 1.0, 0.0));
-    vec3 ks = texelFetch(g_specular, px, 0).rgb;
+    vec4 ks_facing = texelFetch(g_specular, px, 0);
+    vec3 ks = ks_facing.rgb;
+    vec3 ng = oct_decode(vec2(albedo_facing.a, ks_facing.a));
     vec3 V = safe_normalize(frame.camera_pos.xyz - P, N);
 
     float unscale = frame.radiance_scale.y;  // 16-bit inputs hold radiance * scale
@@ -55,7 +58,9 @@ void main() {
         Light l = lights[i];
         LightSample s = sample_light(l, P);
         float cos_theta = dot(N, s.wi);
-        if (cos_theta <= 0.0 || max(s.irradiance.r, max(s.irradiance.g, s.irradiance.b)) <= 0.0) {
+        // Light from behind the geometric surface is blocked (the path tracer's rule), also
+        // where a smoothed shading normal still faces it.
+        if (cos_theta <= 0.0 || dot(ng, s.wi) <= 0.0 || max(s.irradiance.r, max(s.irradiance.g, s.irradiance.b)) <= 0.0) {
             continue;
         }
         float vis = 1.0;

@@ -18,9 +18,10 @@ layout(location = 1) in vec3 v_normal;
 layout(location = 2) in vec2 v_uv;
 layout(location = 3) flat in uint v_material;
 
-layout(location = 0) out vec4 out_albedo;    // R8G8B8A8_SRGB: linear written, sRGB stored
+layout(location = 0) out vec4 out_albedo;    // R8G8B8A8_SRGB: linear written, sRGB stored;
+                                             //   a: geometric normal, octahedral x
 layout(location = 1) out vec4 out_normal;    // RGBA16F: world normal, a shininess
-layout(location = 2) out vec4 out_specular;  // R8G8B8A8_SRGB: Ks
+layout(location = 2) out vec4 out_specular;  // R8G8B8A8_SRGB: Ks; a: geometric normal, oct. y
 layout(location = 3) out vec4 out_emission;  // RGBA16F: emitted radiance * radiance scale
 
 bool has(int tex) {
@@ -52,8 +53,11 @@ void main() {
     vec3 n = safe_normalize(v_normal, ng);
     if (dot(ng, ng) > 0.0 && dot(n, ng) < 0.0) n = -n;
     n = bent_normal(m, n, ng, dpdx, dpdy, duvdx, duvdy);
-    out_albedo = vec4(clamp(albedo, 0.0, 1.0), 1.0);
+    // The geometric normal rides in the two alpha channels: light from behind the surface
+    // itself is blocked whatever the shading normal says, as in the path tracer.
+    vec2 facing = oct_encode(dot(ng, ng) > 0.0 ? ng : n);
+    out_albedo = vec4(clamp(albedo, 0.0, 1.0), facing.x);
     out_normal = vec4(n, clamp(m.specular.a, 0.0, HALF_MAX));
-    out_specular = vec4(clamp(m.specular.rgb, 0.0, 1.0), 1.0);
+    out_specular = vec4(clamp(m.specular.rgb, 0.0, 1.0), facing.y);
     out_emission = vec4(min(max(m.emission.rgb, 0.0) * frame.radiance_scale.x, vec3(HALF_MAX)), 1.0);
 }

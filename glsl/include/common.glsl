@@ -28,6 +28,22 @@ vec3 safe_normalize(vec3 v, vec3 fallback) {
 }
 
 // An orthonormal basis around unit n (Duff et al. 2017).
+// Octahedral encoding of a unit vector into [0, 1]^2 (two 8-bit G-buffer channels hold it to
+// about half a degree), and its decoding.
+vec2 oct_encode(vec3 n) {
+    n /= abs(n.x) + abs(n.y) + abs(n.z);
+    vec2 e = n.z >= 0.0 ? n.xy : (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+    return e * 0.5 + 0.5;
+}
+
+vec3 oct_decode(vec2 e) {
+    e = e * 2.0 - 1.0;
+    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    float t = max(-n.z, 0.0);
+    n.xy -= vec2(n.x >= 0.0 ? t : -t, n.y >= 0.0 ? t : -t);
+    return normalize(n);
+}
+
 mat3 tangent_frame(vec3 n) {
     float s = n.z >= 0.0 ? 1.0 : -1.0;
     float a = -1.0 / (s + n.z);
