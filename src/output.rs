@@ -199,28 +199,53 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
 
 /// Write every file or none. Each is written to a temporary sibling, flushed and synced;
 /// only when all are on the disk are they renamed into place (and their directories
-/// synced). On any error every temporary file is removed and no target is touched.
+/// synced). On any error every temporary file is removed and every target keeps the file it
+/// had: a rename is atomic for one file only, so before the renames each existing target but
+/// the last is hard-linked (or, where links fail, copied) to a backup sibling, and a failed
+/// rename puts the targets renamed before it back from their backups (or removes them where
+/// there was no file).
 pub fn write_all(files: &[(&Path, &[u8])]) -> Result<(), OutputError> {
     let mut written: Vec<PathBuf> = Vec::with_capacity(files.len());
+    let remove_all = |paths: &[PathBuf]| {
+        for p in paths {
+            let _ = std::fs::remove_file(p);
+        }
+    };
     for (path, bytes) in files {
         match write_synced(path, bytes) {
             Ok(tmp) => written.push(tmp),
             Err(e) => {
-                for tmp in &written {
-                    let _ = std::fs::remove_file(tmp);
-                }
+                remove_all(&written);
                 return Err(e);
+            }
+        }
+    }
+    // The last target needs no backup: nothing is renamed after it.
+    let mut backups: Vec<Option<PathBuf>> = Vec::with_capacity(files.len());
+    for (path, _) in &files[..files.len().saturating_sub(1)] {
+        match backup(path) {
+            Ok(b) => backups.push(b),
+            Err(source) => {
+                remove_all(&written);
+                remove_all(&backups.into_iter().flatten().collect::<Vec<_>>());
+                return Err(OutputError::Io { path: path.to_path_buf(), source });
             }
         }
     }
     for (i, ((path, _), tmp)) in files.iter().zip(&written).enumerate() {
         if let Err(source) = std::fs::rename(tmp, path) {
-            for t in &written[i..] {
-                let _ = std::fs::remove_file(t);
+            for ((renamed, _), old) in files[..i].iter().zip(&backups) {
+                let _ = match old {
+                    Some(old) => std::fs::rename(old, renamed),
+                    None => std::fs::remove_file(renamed),
+                };
             }
+            remove_all(&written[i..]);
+            remove_all(&backups.iter().skip(i).flatten().cloned().collect::<Vec<_>>());
             return Err(OutputError::Io { path: path.to_path_buf(), source });
         }
     }
+    remove_all(&backups.into_iter().flatten().collect::<Vec<_>>());
     for (path, _) in files {
         // The renames themselves reach the disk with the directory.
         let dir = parent_dir(path);
@@ -248,6 +273,24 @@ fn write_synced(path: &Path, bytes: &[u8]) -> Result<PathBuf, OutputError> {
             Err(OutputError::Io { path: path.to_path_buf(), source })
         }
     }
+}
+
+/// A backup of the file at `path` beside it (a hard link, or a copy where links fail), or
+/// `None` where there is no file.
+fn backup(path: &Path) -> std::io::Result<Option<PathBuf>> {
+    if std::fs::symlink_metadata(path).is_err() {
+        return Ok(None);
+    }
+    let file_name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+    let old = path.with_file_name(format!(".{file_name}.{}.old.tmp", std::process::id()));
+    let _ = std::fs::remove_file(&old);
+    if std::fs::hard_link(path, &old).is_err() {
+        if let Err(e) = std::fs::copy(path, &old) {
+            let _ = std::fs::remove_file(&old);
+            return Err(e);
+        }
+    }
+    Ok(Some(old))
 }
 
 fn tmp_name(path: &Path) -> PathBuf {
