@@ -68,7 +68,8 @@ void main() {
             vis = cone_vis[i];
         } else if (l.shadow.x >= 0) {
             int layer = shadow_view_index(l, P, frame.shadow.x + 1.5 * frame.shadow.y + 2.0, frame.shadow.z);
-            vis = shadow_visibility(shadow_map, views[layer], layer, P, N, s.wi, s.distance,
+            // The bias against acne follows the geometric surface, the receiver's plane.
+            vis = shadow_visibility(shadow_map, views[layer], layer, P, ng, s.wi, s.distance,
                                     frame.shadow.x, frame.shadow.y, frame.shadow.z);
         }
         vec3 f = brdf_diffuse(albedo) + brdf_specular(ks, ns.a, N, V, s.wi);

@@ -695,7 +695,7 @@ impl Default for RenderSettings {
             shadow_map_size: 1024,
             shadow_cascades: 3,
             shadow_filter_radius: 1.5,
-            shadow_normal_bias: 1.0,
+            shadow_normal_bias: 1.5,
             view: View::Final,
             view_lod: 0.0,
             view_direction: ViewDirection::Ray,
