@@ -439,6 +439,29 @@ fn normal_mapped_direct_light_matches_the_analytic_field_in_both_renderers() {
     assert_direct_light_is_analytic(s, |u, v| FINE.normal(u, v, FINE_SCALE), "normal map");
 }
 
+/// A square whose shading normals lean towards a sun that shines on its back: the light comes
+/// from behind the geometric surface, so neither renderer lets it in (the rasterizer used to
+/// light such surfaces wherever a smoothed normal faced the light: issue 26).
+#[test]
+fn light_from_behind_the_geometric_surface_is_blocked_in_both_renderers() {
+    let v = Vec3::new;
+    let uv = [Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)];
+    let lean = v(-0.7, 0.0, 0.7).normalize();
+    let square = quad("square", [v(-1., -1., 0.), v(1., -1., 0.), v(1., 1., 0.), v(-1., 1., 0.)], uv, lean, 0);
+    let camera =
+        Camera { position: v(0., 0., 3.), target: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 45.0, near: 0.1, far: 10.0 };
+    // Travelling along +x and +z: it comes from -x, below the square (z < 0).
+    let travel = v(1.0, 0.0, 0.2).normalize();
+    assert!(lean.dot(-travel) > 0.5 && Vec3::Z.dot(-travel) < 0.0);
+    let s = scene(vec![square], vec![material("lean", Vec3::splat(0.8))], vec![], camera, vec![sun(travel, 1.0)]);
+    let reference = trace(&s, 4, false);
+    let (raster, _) = render(&context(), s.clone());
+    let i = (s.settings.height / 2 * s.settings.width + s.settings.width / 2) as usize;
+    println!("centre: rasterized {}, path traced {}", raster.radiance[i * 4], reference.mean[i * 3]);
+    assert_eq!(reference.mean[i * 3], 0.0);
+    assert_eq!(raster.radiance[i * 4], 0.0);
+}
+
 /// Rasterized and path-traced direct light on a textured, normal-mapped, alpha-masked scene,
 /// both over the pixel's footprint (`render.supersample = 3` against jittered paths).
 #[test]

@@ -27,9 +27,8 @@ vec3 safe_normalize(vec3 v, vec3 fallback) {
     return (l2 > 1e-30 && !isinf(l2)) ? v * inversesqrt(l2) : fallback;
 }
 
-// An orthonormal basis around unit n (Duff et al. 2017).
 // Octahedral encoding of a unit vector into [0, 1]^2 (two 8-bit G-buffer channels hold it to
-// about half a degree), and its decoding.
+// within about a degree), and its decoding.
 vec2 oct_encode(vec3 n) {
     n /= abs(n.x) + abs(n.y) + abs(n.z);
     vec2 e = n.z >= 0.0 ? n.xy : (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
@@ -44,6 +43,7 @@ vec3 oct_decode(vec2 e) {
     return normalize(n);
 }
 
+// An orthonormal basis around unit n (Duff et al. 2017).
 mat3 tangent_frame(vec3 n) {
     float s = n.z >= 0.0 ? 1.0 : -1.0;
     float a = -1.0 / (s + n.z);
