@@ -219,6 +219,39 @@ fn linear_to_srgb(c: f32) -> f32 {
     }
 }
 
+/// Middle grey: the display value that an image's log-average luminance is exposed to by
+/// `render.exposure = "auto"` (Reinhard's key value).
+pub const AUTO_EXPOSURE_KEY: f32 = 0.18;
+
+/// The exposure (EV stops) that takes the log-average luminance (Rec. 709 weights) of the
+/// image's lit pixels to [`AUTO_EXPOSURE_KEY`]: `log2(key) - mean(log2 Y)` over the pixels
+/// with Y > 0 (black background and unlit pixels left out), clamped to -64..=64. An image with
+/// no lit pixel gets 0.
+pub fn auto_exposure(img: &LinearImage) -> f32 {
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for px in img.rgb.chunks_exact(3) {
+        let y = 0.2126 * px[0] + 0.7152 * px[1] + 0.0722 * px[2];
+        if y.is_finite() && y > 0.0 {
+            sum += f64::from(y).log2();
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return 0.0;
+    }
+    (f64::from(AUTO_EXPOSURE_KEY).log2() - sum / n as f64).clamp(-64.0, 64.0) as f32
+}
+
+/// The exposure a display image of `img` gets under `settings`: `render.exposure`, or the
+/// image's own [`auto_exposure`] where it is "auto".
+pub fn display_exposure(settings: &crate::scene::RenderSettings, img: &LinearImage) -> f32 {
+    if settings.exposure_auto {
+        settings.exposure + auto_exposure(img)
+    } else {
+        settings.exposure
+    }
+}
+
 /// The renderer's display transform, in f32 like the GLSL: per channel
 /// `linear_to_srgb(tonemap(radiance · 2^exposure))`, quantised to 8 bits by rounding to
 /// nearest, `(v · 255 + 0.5) as u8`. Returns RGB8, 3 bytes per pixel, in the image's order.
@@ -497,6 +530,29 @@ fn ssim_map(a: &[f64], b: &[f64], width: usize, height: usize) -> Vec<f32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn flat(width: u32, height: u32, rgb: [f32; 3]) -> LinearImage {
+        LinearImage { width, height, rgb: (0..width * height).flat_map(|_| rgb).collect() }
+    }
+
+    #[test]
+    fn auto_exposure_takes_the_log_average_to_middle_grey() {
+        // Luminance 0.72 everywhere: two stops over 0.18.
+        assert!((auto_exposure(&flat(4, 4, [0.72; 3])) + 2.0).abs() < 1e-5);
+        // Half the pixels at 0.045 and half at 0.72: log-average 0.18, EV 0.
+        let mut img = flat(4, 4, [0.72; 3]);
+        img.rgb[..24].iter_mut().for_each(|v| *v = 0.045);
+        assert!(auto_exposure(&img).abs() < 1e-5);
+        // Black pixels (background) are left out; an all-black image gets 0.
+        img.rgb.extend([0.0; 30]);
+        assert!(auto_exposure(&img).abs() < 1e-5);
+        assert_eq!(auto_exposure(&flat(4, 4, [0.0; 3])), 0.0);
+        // Scaling the radiance by 2^k moves the exposure by -k.
+        let scaled = LinearImage { rgb: img.rgb.iter().map(|v| v * 8.0).collect(), ..img.clone() };
+        assert!((auto_exposure(&scaled) - (auto_exposure(&img) - 3.0)).abs() < 1e-4);
+        // Clamped to the range render.exposure accepts.
+        assert_eq!(auto_exposure(&flat(1, 1, [1e-30; 3])), 64.0);
+    }
 
     fn img(width: u32, height: u32, rgb: Vec<f32>) -> LinearImage {
         LinearImage { width, height, rgb }

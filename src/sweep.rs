@@ -708,7 +708,8 @@ pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Resul
     crate::cli::check_validation(&ctx)?;
     let png_path = dir.join("reference.png");
     if !png_path.exists() {
-        crate::output::write_display_png(&png_path, &reference, base.settings.exposure, base.settings.tonemap)?;
+        let ev = crate::metrics::display_exposure(&base.settings, &reference);
+        crate::output::write_display_png(&png_path, &reference, ev, base.settings.tonemap)?;
     }
 
     let csv_path = dir.join("results.csv");
@@ -758,7 +759,8 @@ pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Resul
         crate::cli::check_validation(&ctx)?;
         let test = LinearImage { width: frame.width, height: frame.height, rgb: crate::output::radiance_rgb(&frame) };
         let s = &scene.settings;
-        let c = compare(&test, &reference, s.exposure, s.tonemap)?;
+        // A test and its reference are shown at one exposure: the reference's, where it is "auto".
+        let c = compare(&test, &reference, crate::metrics::display_exposure(s, &reference), s.tonemap)?;
         let time = [update.frame_host_ms.median, update.frame_host_ms.p95, cached.frame_host_ms.median];
         rows.push(Row::new(config.label(), &s.gi, time, gpu_mib, &c));
         mark_fronts(&mut rows);

@@ -41,6 +41,37 @@ fn scene_with_obj(dir: &Path, obj: &str, mtl: Option<&str>) -> PathBuf {
     write(dir, "s.toml", &format!("{CAMERA}\n[[objects]]\nobj = \"m.obj\"\n\n{LIGHT}"))
 }
 
+/// `render.exposure = "auto"` exposes the PNG so that its lit pixels' log-average luminance is
+/// middle grey, whatever the light's strength, and leaves the EXR's radiance as it is.
+#[test]
+fn auto_exposure_exposes_the_png_and_leaves_the_exr_linear() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = |name: &str, exposure: &str, extra: &[&str]| {
+        let (png, exr) = (dir.path().join(format!("{name}.png")), dir.path().join(format!("{name}.exr")));
+        let set = format!("render.exposure={exposure}");
+        let mut args = vec!["render", "scenes/cornell-box.toml", "--gi", "none", "--width", "32", "--height", "32"];
+        args.extend(["--set", &set]);
+        args.extend(extra);
+        args.extend(["--out", png.to_str().unwrap(), "--out", exr.to_str().unwrap()]);
+        let o = dvsgi_with(&args, &[]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        (image::open(&png).unwrap().to_rgb8(), std::fs::read(&exr).unwrap())
+    };
+    let (fixed, fixed_exr) = out("fixed", "0", &[]);
+    let (auto, auto_exr) = out("auto", "\"auto\"", &[]);
+    assert_eq!(fixed_exr, auto_exr, "auto exposure must not touch the EXR");
+    // The same scene at 1/64 of its light (6 stops less on every light): the same picture.
+    let (dim, _) = out("dim", "\"auto\"", &["--set", "lights.0.intensity=[0.01875, 0.01875, 0.01875]"]);
+    let median = |img: &image::RgbImage| {
+        let mut g: Vec<u8> = img.pixels().filter(|p| p.0 != [0, 0, 0]).map(|p| p.0[1]).collect();
+        g.sort();
+        g[g.len() / 2]
+    };
+    println!("median green: fixed {}, auto {}, auto at 1/64 light {}", median(&fixed), median(&auto), median(&dim));
+    assert!((60..=200).contains(&median(&auto)), "auto-exposed median {}", median(&auto));
+    assert!(median(&auto).abs_diff(median(&dim)) <= 2, "{} against {}", median(&auto), median(&dim));
+}
+
 #[test]
 fn render_writes_png_and_exr() {
     let dir = tempfile::tempdir().unwrap();

@@ -396,3 +396,49 @@ fn degenerate_scenes_stay_finite_and_bounded() {
     s.camera.target = Vec3::new(0.278, 0.273, 0.28);
     check(&ctx, "camera outside looking back", s, 1);
 }
+
+/// A texture over the device's maxImageDimension2D (a 20000 x 1 strip; lavapipe's limit is
+/// 16384) is downscaled with a warning naming it, not refused, and keeps its mean colour: a
+/// square facing a sun of irradiance pi shows its albedo as radiance.
+#[test]
+fn a_texture_over_the_device_limit_is_downscaled_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Red 200, green alternating 255 / 0 (a mean of 0.5 in linear light), blue 50.
+    let strip = image::RgbImage::from_fn(20000, 1, |x, _| image::Rgb([200, if x % 2 == 0 { 255 } else { 0 }, 50]));
+    strip.save(d.join("strip.png")).unwrap();
+    std::fs::write(
+        d.join("q.obj"),
+        "mtllib q.mtl\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nusemtl s\nf 1/1/1 2/2/1 3/3/1 4/4/1\n",
+    )
+    .unwrap();
+    std::fs::write(d.join("q.mtl"), "newmtl s\nKd 1 1 1\nmap_Kd strip.png\n").unwrap();
+    std::fs::write(
+        d.join("s.toml"),
+        "[camera]\nposition = [0, 0, 3]\ntarget = [0, 0, 0]\n[render]\nwidth = 16\nheight = 16\n[gi]\nmode = \"none\"\n\
+         [[objects]]\nobj = \"q.obj\"\n[[lights]]\ntype = \"directional\"\ndirection = [0, 0, -1]\n\
+         irradiance = [3.14159265, 3.14159265, 3.14159265]\ncast_shadows = false\n",
+    )
+    .unwrap();
+    let exr = d.join("s.exr");
+    let o = dvsgi_with(&["render", d.join("s.toml").to_str().unwrap(), "--out", exr.to_str().unwrap()], &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("strip.png) is 20000x1") && stderr(&o).contains("downscaled to 10000x1"),
+        "{}",
+        stderr(&o)
+    );
+    let img = dvsgi::output::read_rgb_f32(&exr).unwrap();
+    // The centre pixel sees the middle of the strip, far inside the square.
+    let c = ((img.height / 2 * img.width + img.width / 2) * 3) as usize;
+    let srgb = |code: f32| ((code / 255.0 + 0.055) / 1.055).powf(2.4);
+    let want = [srgb(200.0), 0.5, srgb(50.0)];
+    for k in 0..3 {
+        assert!(
+            (img.data[c + k] - want[k]).abs() < 0.02 * want[k].max(0.1),
+            "channel {k}: {} against {}",
+            img.data[c + k],
+            want[k]
+        );
+    }
+}

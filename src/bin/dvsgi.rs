@@ -594,7 +594,10 @@ fn reference(
             let bytes = match what {
                 RefOutput::Mean => dvsgi::output::encode_exr(p, w, h, &image.mean)?,
                 RefOutput::Variance => dvsgi::output::encode_exr(p, w, h, &image.variance)?,
-                RefOutput::Display => dvsgi::output::encode_display_png(p, &linear, s.exposure, s.tonemap)?,
+                RefOutput::Display => {
+                    let ev = dvsgi::metrics::display_exposure(s, &linear);
+                    dvsgi::output::encode_display_png(p, &linear, ev, s.tonemap)?
+                }
             };
             Ok((p.as_path(), bytes))
         })

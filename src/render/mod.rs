@@ -436,13 +436,30 @@ impl Renderer {
     /// If no frame was rendered with `readback = true`.
     pub fn output(&self) -> FrameOutput {
         let rb = self.passes.readback.as_ref().expect("render(t, true) before output()");
-        FrameOutput {
+        let mut out = FrameOutput {
             width: self.width,
             height: self.height,
             radiance: bytemuck::pod_collect_to_vec::<u8, f32>(rb.radiance.bytes()),
             display: rb.display.bytes().to_vec(),
+        };
+        if self.scene.settings.exposure_auto {
+            out.display = auto_exposed_display(&out, &self.scene.settings);
         }
+        out
     }
+}
+
+/// The frame's display image (RGBA8) at the exposure `render.exposure = "auto"` picks for its
+/// radiance, through the CPU twin of the tone-map pass (metrics::display_srgb8).
+fn auto_exposed_display(frame: &FrameOutput, settings: &crate::scene::RenderSettings) -> Vec<u8> {
+    let linear = crate::metrics::LinearImage {
+        width: frame.width,
+        height: frame.height,
+        rgb: crate::output::radiance_rgb(frame),
+    };
+    let ev = crate::metrics::display_exposure(settings, &linear);
+    let rgb = crate::metrics::display_srgb8(&linear, ev, settings.tonemap);
+    rgb.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect()
 }
 
 impl Drop for Renderer {

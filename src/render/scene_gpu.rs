@@ -223,6 +223,24 @@ pub fn upload_buffer(ctx: &Arc<Context>, name: &str, data: &[u8], usage: vk::Buf
     Ok(buffer)
 }
 
+/// Drops the mip levels larger than the device's maxImageDimension2D, so that a texture over
+/// the limit is downscaled (by its own mip chain: colour filtered in linear light, masks keeping
+/// their coverage) instead of refused, as engines do, with a warning naming it. Returns the
+/// size of the level kept as level 0. A height map's gradient is per unit of UV, so its bumps
+/// keep their strength.
+fn fit_to_device(ctx: &Context, name: &str, levels: &mut Vec<super::texture::MipLevel>) -> (u32, u32) {
+    let max = ctx.info.limits.max_image_dimension2_d;
+    let fits = levels.iter().position(|l| l.width <= max && l.height <= max).unwrap_or(levels.len() - 1);
+    if fits > 0 {
+        let (w, h, w0, h0) = (levels[fits].width, levels[fits].height, levels[0].width, levels[0].height);
+        eprintln!(
+            "warning: {name} is {w0}x{h0}, over this device's maxImageDimension2D = {max}: downscaled to {w}x{h}"
+        );
+        levels.drain(..fits);
+    }
+    (levels[0].width, levels[0].height)
+}
+
 /// Upload an RGBA8 texture with its full mip chain (`render::texture`: colour filtered in linear
 /// light, data maps as they are), left in SHADER_READ_ONLY_OPTIMAL for sampling anywhere.
 pub fn upload_texture(
@@ -234,6 +252,7 @@ pub fn upload_texture(
     rgba8: &[u8],
 ) -> GpuResult<Image> {
     let mut levels = super::texture::mip_chain_for(usage, width, height, rgba8);
+    let (width, height) = fit_to_device(ctx, name, &mut levels);
     // One format for every texture: lavapipe (Mesa 22.3, LLVM 15) crashes compiling the path
     // tracer when textures of two formats are bound to it. Data in red, green and blue is
     // stored sRGB-encoded, so the sampler's decode returns the data value (steps of at most

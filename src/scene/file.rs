@@ -96,7 +96,7 @@ pub(crate) struct RenderDef {
     pub width: u32,
     pub height: u32,
     pub time: f32,
-    pub exposure: f32,
+    pub exposure: ExposureDef,
     pub tonemap: ToneMap,
     pub shadow_map_size: u32,
     pub shadow_cascades: u32,
@@ -106,6 +106,51 @@ pub(crate) struct RenderDef {
     pub view_lod: f32,
     pub view_direction: ViewDirection,
     pub supersample: u32,
+}
+
+/// `render.exposure`: EV stops, or "auto" (each display image's own key:
+/// metrics::auto_exposure).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum ExposureDef {
+    Ev(f32),
+    Auto,
+}
+
+impl Serialize for ExposureDef {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            ExposureDef::Ev(v) => s.serialize_f32(*v),
+            ExposureDef::Auto => s.serialize_str("auto"),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for ExposureDef {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = ExposureDef;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("EV stops (a number) or \"auto\"")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<ExposureDef, E> {
+                Ok(ExposureDef::Ev(v as f32))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<ExposureDef, E> {
+                Ok(ExposureDef::Ev(v as f32))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<ExposureDef, E> {
+                Ok(ExposureDef::Ev(v as f32))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<ExposureDef, E> {
+                match v {
+                    "auto" => Ok(ExposureDef::Auto),
+                    _ => Err(E::custom(format!("expected EV stops (a number) or \"auto\", found \"{v}\""))),
+                }
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 /// The `[gi]` table is [`GiSettings`] itself.
@@ -118,7 +163,7 @@ impl Default for RenderDef {
             width: d.width,
             height: d.height,
             time: d.time,
-            exposure: d.exposure,
+            exposure: if d.exposure_auto { ExposureDef::Auto } else { ExposureDef::Ev(d.exposure) },
             tonemap: d.tonemap,
             shadow_map_size: d.shadow_map_size,
             shadow_cascades: d.shadow_cascades,
@@ -915,11 +960,16 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
             ctx.invalid("camera", "the view or projection matrix is not finite (coordinates or near/far too extreme)")
         );
     }
+    let (exposure, exposure_auto) = match r.exposure {
+        ExposureDef::Ev(v) => (ctx.scalar("render.exposure", v)?, false),
+        ExposureDef::Auto => (0.0, true),
+    };
     let settings = RenderSettings {
         width: r.width,
         height: r.height,
         time: ctx.scalar("render.time", r.time)?,
-        exposure: ctx.scalar("render.exposure", r.exposure)?,
+        exposure,
+        exposure_auto,
         tonemap: r.tonemap,
         shadow_map_size: r.shadow_map_size,
         shadow_cascades: r.shadow_cascades,

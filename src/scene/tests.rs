@@ -1326,3 +1326,16 @@ fn gi_settings_parse_override_and_validate() {
     assert_eq!((s.settings.gi.bounces, s.settings.gi.diffuse_cones), (3, 16));
     assert_eq!((s.settings.gi.shadows, s.settings.view_direction), (DirectShadows::Cone, ViewDirection::NegZ));
 }
+
+#[test]
+fn exposure_is_ev_stops_or_auto() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let auto = load_default(&write(d, "auto.toml", &format!("{CAMERA}[render]\nexposure = \"auto\"\n"))).unwrap();
+    assert!(auto.settings.exposure_auto && auto.settings.exposure == 0.0);
+    let ev = load_default(&write(d, "ev.toml", &format!("{CAMERA}[render]\nexposure = -2\n"))).unwrap();
+    assert!(!ev.settings.exposure_auto && ev.settings.exposure == -2.0);
+    let e = err_of(load_default(&write(d, "bad.toml", &format!("{CAMERA}[render]\nexposure = \"bright\"\n"))));
+    let line = format!("line {}", CAMERA.lines().count() + 2);
+    assert_msg(&e, &["bad.toml", &line, "exposure", "\"auto\"", "\"bright\""]);
+}

@@ -653,6 +653,10 @@ pub struct RenderSettings {
     pub time: f32,
     /// Exposure in EV stops: displayed value = radiance * 2^exposure before the tone map.
     pub exposure: f32,
+    /// `render.exposure = "auto"`: each display image (PNG) is exposed so that its log-average
+    /// luminance lands on middle grey (metrics::auto_exposure), `exposure` then being 0. EXR
+    /// output is linear radiance either way.
+    pub exposure_auto: bool,
     pub tonemap: ToneMap,
     /// Side of each shadow-map view in texels.
     pub shadow_map_size: u32,
@@ -662,7 +666,8 @@ pub struct RenderSettings {
     pub shadow_cascades: u32,
     /// PCF kernel radius in shadow-map texels (0 = single hardware-filtered tap).
     pub shadow_filter_radius: f32,
-    /// Depth bias in shadow-map texels along the surface normal.
+    /// Bias against shadow acne in shadow-map texels: the lookup moves towards the light by
+    /// the margin a normal offset of this many texels gives a planar receiver.
     pub shadow_normal_bias: f32,
     /// What the frame shows.
     pub view: View,
@@ -691,6 +696,7 @@ impl Default for RenderSettings {
             height: 512,
             time: 0.0,
             exposure: 0.0,
+            exposure_auto: false,
             tonemap: ToneMap::Aces,
             shadow_map_size: 1024,
             shadow_cascades: 3,
