@@ -433,12 +433,7 @@ fn a_texture_over_the_device_limit_is_downscaled_with_a_warning() {
     let c = ((img.height / 2 * img.width + img.width / 2) * 3) as usize;
     let srgb = |code: f32| ((code / 255.0 + 0.055) / 1.055).powf(2.4);
     let want = [srgb(200.0), 0.5, srgb(50.0)];
-    for k in 0..3 {
-        assert!(
-            (img.data[c + k] - want[k]).abs() < 0.02 * want[k].max(0.1),
-            "channel {k}: {} against {}",
-            img.data[c + k],
-            want[k]
-        );
+    for (k, (&got, want)) in img.data[c..c + 3].iter().zip(want).enumerate() {
+        assert!((got - want).abs() < 0.02 * want.max(0.1), "channel {k}: {got} against {want}");
     }
 }
