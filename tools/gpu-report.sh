@@ -2,7 +2,11 @@
 # One command that measures dvsgi on a GPU and writes everything under OUT_DIR, named by the
 # device, ready to commit to docs/bench/:
 #
-#   tools/gpu-report.sh [--bundle DIR] OUT_DIR
+#   tools/gpu-report.sh [--bundle DIR] [--only GROUPS] OUT_DIR
+#
+# GROUPS (comma-separated; default all): info, tests, bench, techniques, serial, sweep, curves.
+# Runs into an existing OUT_DIR add to it (steps.tsv appends), so a report can be split across
+# several shorter sessions on the GPU machine; README.md is rewritten from all of OUT_DIR.
 #
 #   info.txt               dvsgi info (devices, queue families, topology, limits) + per-scene costs
 #   tests.log              the test suite, validation on (any validation message fails a test)
@@ -28,14 +32,27 @@
 set -uo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 bundle=""
-if [ "${1:-}" = "--bundle" ]; then
-  bundle="${2:?--bundle needs a directory}"
+only=""
+while [ $# -gt 1 ]; do
+  case "$1" in
+    --bundle) bundle="${2:?--bundle needs a directory}" ;;
+    --only) only="${2:?--only needs a list of groups}" ;;
+    *) break ;;
+  esac
   shift 2
-fi
+done
 if [ $# -ne 1 ]; then
-  echo "usage: tools/gpu-report.sh [--bundle DIR] OUT_DIR" >&2
+  echo "usage: tools/gpu-report.sh [--bundle DIR] [--only GROUPS] OUT_DIR" >&2
   exit 2
 fi
+for g in ${only//,/ }; do
+  case "$g" in
+    info | tests | bench | techniques | serial | sweep | curves) ;;
+    *) echo "gpu-report: unknown group '$g' (info, tests, bench, techniques, serial, sweep, curves)" >&2; exit 2 ;;
+  esac
+done
+# want GROUP: whether this run measures GROUP.
+want() { [ -z "$only" ] || [[ ",$only," == *",$1,"* ]]; }
 mkdir -p "$1" || exit 1
 out="$(cd "$1" && pwd)"
 cd "$root"
@@ -44,7 +61,7 @@ bin="$root/target/release"
 tests_dir=""
 
 log() { echo "[gpu-report $(date -u +%H:%M:%S)] $*" | tee -a "$out/report.log" >&2; }
-printf 'step\tstatus\tseconds\n' >"$out/steps.tsv"
+[ -s "$out/steps.tsv" ] || printf 'step\tstatus\tseconds\n' >"$out/steps.tsv"
 failed=0
 # step NAME SECONDS CMD...: run with a time limit, log, record status; never stops the report.
 step() {
@@ -105,18 +122,22 @@ if [ -z "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ] && [ -f "$nv_icd" ]; then
 fi
 
 # ----- 1. The device. -----
-step info 60 "$bin/dvsgi" info >"$out/info.txt" 2>&1
+if want info || [ ! -s "$out/info.txt" ]; then
+  step info 60 "$bin/dvsgi" info >"$out/info.txt" 2>&1
+fi
 device="$(sed -n 's/^chosen device: \[[0-9]*\] //p' "$out/info.txt" | head -1)"
 device="${device:-unknown device}"
 log "device: $device"
 echo "$device" >"$out/DEVICE"
 command -v nvidia-smi >/dev/null && nvidia-smi >"$out/nvidia-smi.txt" 2>&1
-for s in cornell-box sponza; do
-  for v in 128 256; do
-    step "info-$s-v$v" 120 "$bin/dvsgi" info "scenes/$s.toml" --set "gi.voxel_resolution=$v" \
-      >>"$out/info.txt" 2>&1
+if want info; then
+  for s in cornell-box sponza; do
+    for v in 128 256; do
+      step "info-$s-v$v" 120 "$bin/dvsgi" info "scenes/$s.toml" --set "gi.voxel_resolution=$v" \
+        >>"$out/info.txt" 2>&1
+    done
   done
-done
+fi
 
 # ----- 2. The test suite, validation on. -----
 run_tests() {
@@ -138,7 +159,7 @@ run_tests() {
 }
 if [ "$quick" = 1 ]; then
   log "tests: skipped (DVSGI_REPORT_QUICK=1)"
-else
+elif want tests; then
   step tests 900 run_tests >"$out/tests.log" 2>&1
 fi
 
@@ -148,7 +169,7 @@ if [ "$quick" = 1 ]; then
 else
   w=1920 h=1080 res=(128 256) frames=30 warmup=3
 fi
-for run in "cornell static cornell-box" "cornell dynamic dynamic-stress" \
+want bench && for run in "cornell static cornell-box" "cornell dynamic dynamic-stress" \
   "sponza static sponza" "sponza dynamic sponza-dynamic"; do
   read -r name scenario scene <<<"$run"
   for v in "${res[@]}"; do
@@ -161,7 +182,7 @@ for run in "cornell static cornell-box" "cornell dynamic dynamic-stress" \
 done
 
 # ----- 3b. The study's other techniques and its mix (issue 18): static, all modes. -----
-for run in "cornell cornell-box" "sponza sponza"; do
+want techniques && for run in "cornell cornell-box" "sponza sponza"; do
   read -r name scene <<<"$run"
   for mode in rsm lpv rsm+lpv; do
     tag="$name-${mode/+/-}"
@@ -172,7 +193,7 @@ for run in "cornell cornell-box" "sponza sponza"; do
 done
 
 # ----- 4. Serial profile: every pass alone, host-timed, beside the timestamps. -----
-for run in "cornell cornell-box ${res[0]}" "sponza sponza ${res[1]}"; do
+want serial && for run in "cornell cornell-box ${res[0]}" "sponza sponza ${res[1]}"; do
   read -r name scene v <<<"$run"
   step "serial-$name-v$v" 300 "$bin/bench" --scene "scenes/$scene.toml" --modes sync,async \
     --width "$w" --height "$h" --set "gi.voxel_resolution=$v" --frames "$frames" --warmup "$warmup" \
@@ -186,10 +207,10 @@ else
   grid=(--grid voxel_resolution=64,128,256 --grid diffuse_cones=6,9)
   sweep=(--spp 1024 --width 480 --height 270 --frames 10)
 fi
-step sweep-cornell 420 "$bin/dvsgi" sweep scenes/cornell-box.toml --out "$out/sweep-cornell" "${grid[@]}" "${sweep[@]}" \
+want sweep && step sweep-cornell 420 "$bin/dvsgi" sweep scenes/cornell-box.toml --out "$out/sweep-cornell" "${grid[@]}" "${sweep[@]}" \
   >"$out/sweep-cornell.txt" 2>&1
 # The other techniques into the same directory: one frontier with every technique.
-step sweep-cornell-rsm-lpv 420 "$bin/dvsgi" sweep scenes/cornell-box.toml --out "$out/sweep-cornell" \
+want sweep && step sweep-cornell-rsm-lpv 420 "$bin/dvsgi" sweep scenes/cornell-box.toml --out "$out/sweep-cornell" \
   "${sweep[@]}" --grid mode=rsm,lpv,rsm+lpv >>"$out/sweep-cornell.txt" 2>&1
 
 # ----- 6. Cost curves: per-pass cost against voxel resolution, pixels and triangles. -----
@@ -198,7 +219,7 @@ if [ "$quick" = 1 ]; then
 else
   curves=(--resolutions 32,64,128,256 --sizes 256,512,1024,2048 --size 512 --resolution 128 --frames 5)
 fi
-if command -v python3 >/dev/null; then
+if want curves && command -v python3 >/dev/null; then
   step cost-curves 300 python3 tools/cost-curves.py --bench "$bin/bench" --out "$out/curves" "${curves[@]}" \
     --triangle-scenes scenes/cornell-box.toml,scenes/cornell-sphere.toml,scenes/sponza.toml >"$out/curves.txt" 2>&1
 fi
