@@ -481,6 +481,13 @@ fn supersampled_textured_direct_light_matches_the_reference() {
     s.materials[0].albedo_texture = Some(1);
     s.materials[0].normal_texture = Some(2);
     s.materials[0].bump_scale = 0.05;
+    // The floor fills the view. Its silhouette, one image row, weighs 3 x 3 ordered samples
+    // against the reference's box integral over partly covered pixels: -0.45% of the image's
+    // mean on its own, by chance offset by the texture on Mesa 22 and not on Mesa 25 (a flat
+    // texture gave -1.16% on both), so the mean compared what this test does not check.
+    for p in &mut s.meshes[0].positions {
+        *p *= Vec3::new(1.5, 1.0, 1.5);
+    }
     s.settings.width = 48;
     s.settings.height = 48;
     s.settings.supersample = 3;

@@ -1,5 +1,5 @@
 //! A file the user already has at an output path survives a failed write, byte for byte: a
-//! full disk (a file-size limit: writes past it fail with EFBIG), a sibling output that fails
+//! full disk (a tiny tmpfs: writes past it fail with ENOSPC), a sibling output that fails
 //! (at its write, or at its rename), and `kill -9` at any moment of a large EXR write, which
 //! must leave either the old file or the complete new one, never a truncated one. Each runs the
 //! real `dvsgi` binary. Before `src/output.rs` wrote to temporaries and renamed them, each of
@@ -18,18 +18,40 @@ fn dvsgi_command() -> Command {
     c
 }
 
-/// `dvsgi args` with its file size limited to `blocks` of 512 bytes (`ulimit -f`, SIGXFSZ
-/// ignored), so that a write past the limit fails with EFBIG ("File too large") as a write to
-/// a full disk fails with ENOSPC; any user, no mount needed.
-fn dvsgi_limited(blocks: u64, args: &[&str]) -> Output {
-    let mut c = Command::new("sh");
-    c.args(["-c", "trap '' XFSZ; ulimit -f \"$0\" && exec \"$@\""])
-        .arg(blocks.to_string())
+/// The outputs' directory on a full disk: a tmpfs of `KIB` KiB mounted in a user and mount
+/// namespace of its own (`unshare -rm`: any user where unprivileged user namespaces are on,
+/// as on Debian and Ubuntu), seeded with `files`. `dvsgi` runs there with `args(dir)`, and the
+/// directory's contents after the run are copied out, since the mount ends with the namespace.
+/// None (the test is skipped, saying why) where the namespace cannot be made. A file-size
+/// limit (`ulimit -f`) cannot stand in for the full disk: Mesa 25's lavapipe backs device
+/// memory with memfd files, which the limit also caps (the process dies of SIGBUS).
+fn dvsgi_on_a_full_disk(files: &[(&str, &[u8])], args: impl Fn(&Path) -> Vec<String>) -> Option<(Output, tempfile::TempDir)> {
+    let probe = Command::new("unshare").args(["-rm", "true"]).stderr(Stdio::null()).status();
+    if !probe.is_ok_and(|s| s.success()) {
+        eprintln!("skipped: `unshare -rm` (a user and mount namespace for a tmpfs) is not available here");
+        return None;
+    }
+    let (seed, mount, snapshot) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    for (name, bytes) in files {
+        std::fs::write(seed.path().join(name), bytes).unwrap();
+    }
+    let script = "mount -t tmpfs -o size=\"$0\"k tmpfs \"$1\" && cp -a \"$2\"/. \"$1\"/ || exit 97
+        shift 2; \"$@\"; rc=$?; cp -a \"$D\"/. \"$S\"/ || exit 97; exit $rc";
+    let o = Command::new("unshare")
+        .args(["-rm", "sh", "-c", script])
+        .arg(FULL_DISK_KIB.to_string())
+        .arg(mount.path())
+        .arg(seed.path())
         .arg(env!("CARGO_BIN_EXE_dvsgi"))
-        .args(args)
+        .args(args(mount.path()))
+        .env("D", mount.path())
+        .env("S", snapshot.path())
         .current_dir(repo())
-        .env("DVSGI_VALIDATION", "1");
-    c.output().expect("run sh")
+        .env("DVSGI_VALIDATION", "1")
+        .output()
+        .expect("run unshare");
+    assert_ne!(o.status.code(), Some(97), "could not mount the tmpfs:\n{}", stderr(&o));
+    Some((o, snapshot))
 }
 
 /// `render` of the Cornell box, direct light only, `size`², to every `out`.
@@ -46,12 +68,9 @@ fn render_args(size: u32, out: &[&Path]) -> Vec<String> {
     args
 }
 
-fn strs(v: &[String]) -> Vec<&str> {
-    v.iter().map(String::as_str).collect()
-}
-
-/// The limit: 64 blocks (32 KiB). A 128² render's PNG (14 KB) fits, its EXR (160 KB) does not.
-const LIMIT_BLOCKS: u64 = 64;
+/// The full disk: 96 KiB. The old EXR (48 KB), an old PNG and a 128² render's new PNG (14 KB)
+/// fit; its EXR (160 KB) does not.
+const FULL_DISK_KIB: u64 = 96;
 const SIZE: u32 = 128;
 
 /// A user's earlier EXR (a radiance image from the repository).
@@ -85,49 +104,49 @@ fn assert_intact(path: &Path, old: &[u8], what: &str) {
     );
 }
 
-/// A full disk: the new EXR does not fit under the file-size limit, the write fails, and the
-/// EXR already at the output path is unchanged, with nothing else left in its directory.
+/// A full disk: the new EXR does not fit on it, the write fails, and the EXR already at the
+/// output path is unchanged, with nothing else left in its directory.
 #[test]
 fn a_full_disk_leaves_the_old_file_intact() {
+    let old = old_exr();
+    let Some((o, after)) = dvsgi_on_a_full_disk(&[("x.exr", &old)], |d| render_args(SIZE, &[&d.join("x.exr")])) else {
+        return;
+    };
+    let err = stderr(&o);
+    assert!(!o.status.success(), "the write to a full disk must fail:\n{}{err}", stdout(&o));
+    assert!(err.contains("x.exr") && err.contains("No space left on device"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert_intact(&after.path().join("x.exr"), &old, "full disk");
+    assert_eq!(names(after.path()), ["x.exr"], "a temporary file is left");
+    // With room the same command replaces the file with a larger one: the full disk is what
+    // failed it.
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.exr");
-    let old = old_exr();
     std::fs::write(&out, &old).unwrap();
-    let o = dvsgi_limited(LIMIT_BLOCKS, &strs(&render_args(SIZE, &[&out])));
-    let err = stderr(&o);
-    assert!(!o.status.success(), "the write past the limit must fail:\n{}{err}", stdout(&o));
-    assert!(err.contains("x.exr") && err.contains("File too large"), "{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    assert_intact(&out, &old, "full disk");
-    assert_eq!(names(dir.path()), ["x.exr"], "a temporary file is left");
-    // Without the limit the same command replaces the file with a larger one: the limit is
-    // what failed it.
     let o = dvsgi_command().args(render_args(SIZE, &[&out])).output().unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     let new = std::fs::read(&out).unwrap();
-    assert!(new != old && new.len() as u64 > LIMIT_BLOCKS * 512, "new EXR: {} bytes", new.len());
+    assert!(new != old && new.len() as u64 > FULL_DISK_KIB * 1024, "new EXR: {} bytes", new.len());
 }
 
-/// Two outputs, the second of which fails at its write (the PNG fits under the limit, the EXR
+/// Two outputs, the second of which fails at its write (the PNG fits on the disk, the EXR
 /// does not): the command writes all or none, so the first output's old file is unchanged too.
 #[test]
 fn a_sibling_output_that_fails_to_write_leaves_every_old_file_intact() {
-    let dir = tempfile::tempdir().unwrap();
-    let (png, exr) = (dir.path().join("x.png"), dir.path().join("y.exr"));
-    let (old_p, old_e) = (old_png(&png), old_exr());
-    std::fs::write(&png, &old_p).unwrap();
-    std::fs::write(&exr, &old_e).unwrap();
-    let o = dvsgi_limited(LIMIT_BLOCKS, &strs(&render_args(SIZE, &[&png, &exr])));
+    let (old_p, old_e) = (old_png(Path::new("x.png")), old_exr());
+    let files: [(&str, &[u8]); 2] = [("x.png", &old_p), ("y.exr", &old_e)];
+    let both = |d: &Path| render_args(SIZE, &[&d.join("x.png"), &d.join("y.exr")]);
+    let Some((o, after)) = dvsgi_on_a_full_disk(&files, both) else { return };
     let err = stderr(&o);
     assert!(!o.status.success(), "{}{err}", stdout(&o));
-    assert!(err.contains("y.exr") && err.contains("File too large"), "{err}");
-    assert_intact(&png, &old_p, "the PNG beside a failed EXR");
-    assert_intact(&exr, &old_e, "the failed EXR");
-    assert_eq!(names(dir.path()), ["x.png", "y.exr"], "a temporary file is left");
-    // The PNG alone fits under the limit: it was the EXR that failed.
-    let o = dvsgi_limited(LIMIT_BLOCKS, &strs(&render_args(SIZE, &[&png])));
+    assert!(err.contains("y.exr") && err.contains("No space left on device"), "{err}");
+    assert_intact(&after.path().join("x.png"), &old_p, "the PNG beside a failed EXR");
+    assert_intact(&after.path().join("y.exr"), &old_e, "the failed EXR");
+    assert_eq!(names(after.path()), ["x.png", "y.exr"], "a temporary file is left");
+    // The PNG alone fits on the same disk: it was the EXR that failed.
+    let (o, after) = dvsgi_on_a_full_disk(&files, |d| render_args(SIZE, &[&d.join("x.png")])).unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(std::fs::read(&png).unwrap() != old_p, "the PNG was rewritten");
+    assert!(std::fs::read(after.path().join("x.png")).unwrap() != old_p, "the PNG was rewritten");
 }
 
 /// An immutable file (`chattr +i`): even root can neither replace nor remove it. Removes the

@@ -4,10 +4,13 @@ rule as dvsgi's voxelizer (every voxel a triangle touches, by the 13-axis separa
 test), for grids the GPU at hand cannot hold (`dvsgi info SCENE` reports the same figures
 from the real voxelization where it fits; run both at a size that fits to check them).
 
-    tools/occupancy.py OBJ --min X Y Z --max X Y Z --resolution N [N ...]
+    tools/occupancy.py OBJ --min X Y Z --max X Y Z --resolution N [N ...] [--bricks SHAPE ...]
 
 The grid is the cube around [min, max] (a scene file's `[scene] bounds`), as dvsgi places it.
-Prints occupied voxels and occupied 4^3 and 8^3 bricks per resolution. Needs numpy.
+Prints occupied voxels and the occupied bricks of each SHAPE (default 4 8): a side (`8`) or
+X x Y x Z voxels (`32x32x16`, a sparse image's page of 32-bit texels). A shape ending in `+`
+also counts the bricks holding a voxel one step below an occupied one on any axis (what a
+trilinear lookup between an empty brick and an occupied one reads). Needs numpy.
 """
 import argparse
 import numpy as np
@@ -61,6 +64,7 @@ def main():
     ap.add_argument("--min", type=float, nargs=3, required=True)
     ap.add_argument("--max", type=float, nargs=3, required=True)
     ap.add_argument("--resolution", type=int, nargs="+", required=True)
+    ap.add_argument("--bricks", nargs="+", default=["4", "8"])
     a = ap.parse_args()
     verts, tris = load_obj(a.obj)
     lo, hi = np.array(a.min), np.array(a.max)
@@ -76,11 +80,23 @@ def main():
         idx = np.nonzero(occ)[0]
         x, y, z = idx % res, (idx // res) % res, idx // (res * res)
         line = f"{res}^3: {len(idx)} occupied ({100 * len(idx) / res ** 3:.3f}%)"
-        for side in (4, 8):
-            n = (res + side - 1) // side
-            b = np.unique((x // side) + n * ((y // side) + n * (z // side)))
-            line += f", {len(b)} of {n ** 3} {side}^3 bricks ({100 * len(b) / n ** 3:.2f}%)"
+        for shape in a.bricks:
+            line += ", " + bricks(np.stack([x, y, z], -1), res, shape)
         print(line, flush=True)
+
+
+def bricks(c, res, shape):
+    """'K of M SHAPE bricks (P%)': the bricks of `shape` holding any of the voxels c."""
+    dilate = shape.endswith("+")
+    dims = [int(d) for d in shape.rstrip("+").split("x")]
+    dims = np.array(dims * 3 if len(dims) == 1 else dims)
+    if dilate:
+        c = np.concatenate([c] + [np.maximum(c - np.eye(3, dtype=int)[i], 0) for i in range(3)])
+    n = -(-res // dims)
+    b = c // dims
+    b = np.unique(b[:, 0] + n[0] * (b[:, 1] + n[1] * b[:, 2]))
+    slots = int(np.prod(n))
+    return f"{len(b)} of {slots} {shape} bricks ({100 * len(b) / slots:.2f}%)"
 
 
 if __name__ == "__main__":
