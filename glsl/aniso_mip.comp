@@ -5,7 +5,8 @@
 // (premultiplied "over": c = c_front + (1 - a_front) c_back) for each of the four rows, and
 // the four rows are averaged. Same for -x (front = high x), +y, -y, +z, -z. Texels are stored
 // as (L * tau, tau) (voxel.glsl); the full-resolution volume holds (L, occupancy 0 or 1),
-// which is premultiplied already.
+// which is premultiplied already. With bricked volumes (bricks.glsl) a pooled level is
+// written brick by brick over its resident bricks (indirect), and read through its map.
 #include "common.glsl"
 #include "voxel.glsl"
 
@@ -14,16 +15,44 @@ layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 // Level 0 reads the full-resolution volume (bound in every slot of `src`); higher levels
 // read the previous level of each directional volume.
 layout(constant_id = 0) const bool FROM_FULL = true;
+// The pool the source level is in (0: a dense level) and the pool written (0: dense, every
+// texel; else the pool's resident bricks).
+layout(constant_id = 1) const int SRC_POOL = 0;
+layout(constant_id = 2) const int DST_POOL = 0;
 
 layout(set = 0, binding = 0, rgba16f) uniform readonly image3D src[6];
 layout(set = 0, binding = 1, rgba16f) uniform writeonly image3D dst[6];
+layout(set = 0, binding = 2) uniform GridBlock { VoxelGrid grid; };
+layout(set = 0, binding = 3, r32ui) uniform readonly uimage3D brick_maps[4];
+#include "bricks.glsl"
+#define BRICK_LIST_BINDING 4
+#define BRICK_LIST_QUALIFIER readonly
+#include "brick_list.glsl"
 
 vec4 over(vec4 front, vec4 back) {
     return front + (1.0 - clamp(front.a, 0.0, 1.0)) * back;
 }
 
+// Where texel C of the source level is stored; (-1) when it is empty (not resident).
+ivec3 src_texel(ivec3 C) {
+    if (FROM_FULL) return full_texel(C);
+    return SRC_POOL == 0 ? C : level_texel(SRC_POOL, C);
+}
+
 // Literal indices only: arrays of storage images are not indexed dynamically.
-#define LOAD(FACE, C) (FROM_FULL ? imageLoad(src[0], C) : alpha_from_tau(imageLoad(src[FACE], C)))
+#define LOAD_AT(FACE, T) (FROM_FULL ? imageLoad(src[0], T) : alpha_from_tau(imageLoad(src[FACE], T)))
+#define LOAD(FACE, C) load_##FACE(C)
+#define DEFINE_LOAD(FACE)                                 \
+    vec4 load_##FACE(ivec3 C) {                           \
+        ivec3 t = src_texel(C);                           \
+        return t.x < 0 ? vec4(0.0) : LOAD_AT(FACE, t);    \
+    }
+DEFINE_LOAD(0)
+DEFINE_LOAD(1)
+DEFINE_LOAD(2)
+DEFINE_LOAD(3)
+DEFINE_LOAD(4)
+DEFINE_LOAD(5)
 
 #define INTEGRATE(FACE, AXIS, FRONT)                                              \
     {                                                                             \
@@ -37,12 +66,24 @@ vec4 over(vec4 front, vec4 back) {
                 acc += over(LOAD(FACE, front), LOAD(FACE, back));                 \
             }                                                                     \
         }                                                                         \
-        imageStore(dst[FACE], c, min(tau_from_alpha(acc * 0.25), vec4(HALF_MAX)));  \
+        imageStore(dst[FACE], store_at, min(tau_from_alpha(acc * 0.25), vec4(HALF_MAX)));  \
     }
 
 void main() {
-    ivec3 c = ivec3(gl_GlobalInvocationID);
-    if (any(greaterThanEqual(c, imageSize(dst[0])))) return;
+    ivec3 c, store_at;
+    if (DST_POOL == 0) {
+        c = ivec3(gl_GlobalInvocationID);
+        if (any(greaterThanEqual(c, imageSize(dst[0])))) return;
+        store_at = c;
+    } else {
+        uint i = brick_dispatch_index(DST_POOL);
+        if (i == ~0u) return;
+        ivec3 b = unpack_brick(blist.entries[blist.first[DST_POOL] + i]);
+        uint block = gl_WorkGroupID.y % 8u;
+        c = b * 8 + ivec3(block & 1u, (block >> 1) & 1u, block >> 2) * 4 + ivec3(gl_LocalInvocationID);
+        store_at = level_texel(DST_POOL, c);  // the apron brick past the last texel has none
+        if (store_at.x < 0) return;
+    }
     ivec3 base = c * 2;
     INTEGRATE(0, 0, 0)  // +x: cones travelling +x meet low x first
     INTEGRATE(1, 0, 1)  // -x

@@ -31,6 +31,9 @@ layout(set = 0, binding = 8) uniform sampler3D aniso[6];
 layout(set = 0, binding = 9, rgba16f) uniform writeonly image2D out_diffuse;
 layout(set = 0, binding = 10, rgba16f) uniform writeonly image2D out_specular;
 layout(set = 0, binding = 11, rgba8) uniform writeonly image2D out_shadow;
+layout(set = 0, binding = 12, r32ui) uniform readonly uimage3D brick_maps[4];
+layout(set = 0, binding = 13) uniform texture3D aniso_pool[18];
+layout(set = 0, binding = 14) uniform sampler pool_sampler;
 #include "cone.glsl"
 
 // Half aperture of the specular cone for Blinn-Phong exponent n: the cone holding half the
@@ -55,7 +58,8 @@ vec3 first_voxel_radiance(vec3 g, vec3 d) {
     VoxelWalk w = voxel_walk(g, d);
     if (any(lessThan(w.c, ivec3(0))) || any(greaterThanEqual(w.c, ivec3(res)))) return vec3(0.0);
     for (int i = 0; i < 3 * 512; ++i) {
-        vec4 v = texelFetch(vox_lod0, w.c, 0);
+        ivec3 t = full_texel(w.c);
+        vec4 v = t.x < 0 ? vec4(0.0) : texelFetch(vox_lod0, t, 0);
         if (v.a > 0.0) return v.rgb;
         if (!voxel_walk_step(w, res)) break;
     }

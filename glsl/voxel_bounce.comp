@@ -24,6 +24,9 @@ layout(set = 0, binding = 7, rgba16f) uniform writeonly image3D vox_indirect;
 #define VOXEL_LIST_BINDING 8
 #define VOXEL_LIST_QUALIFIER readonly
 #include "voxel_list.glsl"
+layout(set = 0, binding = 9, r32ui) uniform readonly uimage3D brick_maps[4];
+layout(set = 0, binding = 10) uniform texture3D aniso_pool[18];
+layout(set = 0, binding = 11) uniform sampler pool_sampler;
 #include "cone.glsl"
 
 void main() {
@@ -35,10 +38,12 @@ void main() {
     uint turn = (entry / VOXEL_LIST_GROUP) % interleave;
     if (entry < vlist.static_count && turn != frame.voxel.x % interleave) return;
     ivec3 c = unpack_voxel(vlist.entries[entry]);
-    uint a = imageLoad(vox_albedo, c).r;
+    ivec3 t = full_texel(c);
+    if (t.x < 0) return;
+    uint a = imageLoad(vox_albedo, t).r;
     vec3 albedo = unpack_rgb_count(a).rgb / 255.0;
-    vec3 n_avg = unpack_rgb_count(imageLoad(vox_normal, c).r).rgb / 255.0 * 2.0 - 1.0;
+    vec3 n_avg = unpack_rgb_count(imageLoad(vox_normal, t).r).rgb / 255.0 * 2.0 - 1.0;
     vec3 N = safe_normalize(n_avg, vec3(0.0, 1.0, 0.0));
     vec4 d = trace_diffuse(ConeOrigin(vec3(c) + 0.5, N, 0.5));
-    imageStore(vox_indirect, c, vec4(min(albedo * d.rgb, vec3(HALF_MAX)), 1.0));
+    imageStore(vox_indirect, t, vec4(min(albedo * d.rgb, vec3(HALF_MAX)), 1.0));
 }

@@ -13,11 +13,15 @@ layout(local_size_x = 64) in;
 layout(set = 0, binding = 1, rgba16f) uniform readonly image3D vox_direct;
 layout(set = 0, binding = 2, rgba16f) uniform readonly image3D vox_indirect;
 layout(set = 0, binding = 3, rgba16f) uniform writeonly image3D vox_bounced;
+layout(set = 0, binding = 4) uniform GridBlock { VoxelGrid grid; };
+layout(set = 0, binding = 5, r32ui) uniform readonly uimage3D brick_maps[4];
+#include "bricks.glsl"
 
 void main() {
     uint entry = list_invocation();
     if (entry >= vlist.occupied.count) return;
-    ivec3 c = unpack_voxel(vlist.entries[entry]);
-    vec3 sum = imageLoad(vox_direct, c).rgb + imageLoad(vox_indirect, c).rgb;
-    imageStore(vox_bounced, c, vec4(min(sum, vec3(HALF_MAX)), 1.0));
+    ivec3 t = full_texel(unpack_voxel(vlist.entries[entry]));
+    if (t.x < 0) return;
+    vec3 sum = imageLoad(vox_direct, t).rgb + imageLoad(vox_indirect, t).rgb;
+    imageStore(vox_bounced, t, vec4(min(sum, vec3(HALF_MAX)), 1.0));
 }

@@ -14,14 +14,18 @@ layout(set = 0, binding = 2, r32ui) uniform writeonly uimage3D vox_emission;
 #define VOXEL_LIST_BINDING 3
 #define VOXEL_STALE_BINDING 4
 #include "voxel_list.glsl"
+layout(set = 0, binding = 5) uniform GridBlock { VoxelGrid grid; };
+layout(set = 0, binding = 6, r32ui) uniform readonly uimage3D brick_maps[4];
+#include "bricks.glsl"
 
 void main() {
     uint i = list_invocation();
     if (i >= vlist.dynamic.count) return;
     uint e = vlist.entries[vlist.static_count + i];
-    ivec3 c = unpack_voxel(e);
-    imageStore(vox_albedo, c, uvec4(0u));
-    imageStore(vox_normal, c, uvec4(0u));
-    if (HAS_EMISSION) imageStore(vox_emission, c, uvec4(0u));
     stale_entries[i] = e;
+    ivec3 t = full_texel(unpack_voxel(e));
+    if (t.x < 0) return;
+    imageStore(vox_albedo, t, uvec4(0u));
+    imageStore(vox_normal, t, uvec4(0u));
+    if (HAS_EMISSION) imageStore(vox_emission, t, uvec4(0u));
 }

@@ -27,13 +27,14 @@ layout(set = 0, binding = 8, rgba16f) uniform writeonly image3D vox_radiance;
 #define VOXEL_LIST_BINDING 9
 #define VOXEL_LIST_QUALIFIER readonly
 #include "voxel_list.glsl"
+layout(set = 0, binding = 10, r32ui) uniform readonly uimage3D brick_maps[4];
+#include "bricks.glsl"
 
 layout(push_constant) uniform Push { float softness; } pc;
 
 bool occupied(ivec3 c) {
-    int res = int(grid.dims.x);
-    if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(res)))) return false;
-    return (imageLoad(vox_albedo, c).r >> 24) != 0u;
+    ivec3 t = full_texel(c);
+    return t.x >= 0 && (imageLoad(vox_albedo, t).r >> 24) != 0u;
 }
 
 // Trilinear occupancy at grid position g (voxel units).
@@ -88,9 +89,11 @@ void main() {
     uint entry = list_invocation();
     if (entry >= vlist.occupied.count) return;
     ivec3 c = unpack_voxel(vlist.entries[entry]);
-    uint a = imageLoad(vox_albedo, c).r;
+    ivec3 t = full_texel(c);
+    if (t.x < 0) return;
+    uint a = imageLoad(vox_albedo, t).r;
     vec3 albedo = unpack_rgb_count(a).rgb / 255.0;
-    vec3 n_avg = unpack_rgb_count(imageLoad(vox_normal, c).r).rgb / 255.0 * 2.0 - 1.0;
+    vec3 n_avg = unpack_rgb_count(imageLoad(vox_normal, t).r).rgb / 255.0 * 2.0 - 1.0;
     vec3 N = safe_normalize(n_avg, vec3(0.0, 1.0, 0.0));
     float voxel = grid.origin.w;
     vec3 center = grid.origin.xyz + (vec3(c) + 0.5) * voxel;
@@ -117,7 +120,7 @@ void main() {
     }
     vec3 radiance = albedo * INV_PI * irradiance;
     if (HAS_EMISSION) {
-        radiance += unpack_rgb_count(imageLoad(vox_emission, c).r).rgb / 255.0 * grid.params.x;
+        radiance += unpack_rgb_count(imageLoad(vox_emission, t).r).rgb / 255.0 * grid.params.x;
     }
-    imageStore(vox_radiance, c, vec4(min(radiance * grid.params.y, vec3(HALF_MAX)), 1.0));
+    imageStore(vox_radiance, t, vec4(min(radiance * grid.params.y, vec3(HALF_MAX)), 1.0));
 }

@@ -18,6 +18,9 @@ layout(set = 0, binding = 2) uniform GiBlock { GiParams gi; };
 layout(set = 0, binding = 3) uniform sampler3D vox_lod0;
 layout(set = 0, binding = 4) uniform sampler3D aniso[6];
 layout(set = 0, binding = 5, rgba32f) uniform writeonly image2D out_radiance;
+layout(set = 0, binding = 6, r32ui) uniform readonly uimage3D brick_maps[4];
+layout(set = 0, binding = 7) uniform texture3D aniso_pool[18];
+layout(set = 0, binding = 8) uniform sampler pool_sampler;
 #include "cone.glsl"
 
 layout(push_constant) uniform Push { float lod; } pc;

@@ -12,11 +12,14 @@ layout(local_size_x = 64) in;
 #include "voxel_list.glsl"
 layout(set = 0, binding = 2, r32ui) uniform readonly uimage3D vox_albedo;
 layout(set = 0, binding = 3, rgba16f) uniform writeonly image3D vox_target;
+layout(set = 0, binding = 4) uniform GridBlock { VoxelGrid grid; };
+layout(set = 0, binding = 5, r32ui) uniform readonly uimage3D brick_maps[4];
+#include "bricks.glsl"
 
 void main() {
     uint i = list_invocation();
     if (i >= vlist.stale.count) return;
-    ivec3 c = unpack_voxel(stale_entries[i]);
-    if ((imageLoad(vox_albedo, c).r >> 24) != 0u) return;
-    imageStore(vox_target, c, vec4(0.0));
+    ivec3 t = full_texel(unpack_voxel(stale_entries[i]));
+    if (t.x < 0 || (imageLoad(vox_albedo, t).r >> 24) != 0u) return;
+    imageStore(vox_target, t, vec4(0.0));
 }

@@ -14,6 +14,8 @@ layout(set = 0, binding = 1) uniform GridBlock { VoxelGrid grid; };
 layout(set = 0, binding = 2, r32ui) uniform readonly uimage3D volume;
 layout(set = 0, binding = 3, rgba32f) uniform writeonly image2D out_radiance;
 layout(set = 0, binding = 4, rgba16f) uniform readonly image3D vox_radiance;
+layout(set = 0, binding = 5, r32ui) uniform readonly uimage3D brick_maps[4];
+#include "bricks.glsl"
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -28,11 +30,12 @@ void main() {
         vec3 p = clamp(o + d * (tenter + 1e-4), vec3(0.0), vec3(res - 1e-3));
         VoxelWalk w = voxel_walk(p, d);
         for (int i = 0; i < 3 * 512; ++i) {
-            uint v = imageLoad(volume, w.c).r;
+            ivec3 t = full_texel(w.c);
+            uint v = t.x < 0 ? 0u : imageLoad(volume, t).r;
             if ((v >> 24) != 0u) {
                 vec3 rgb = unpack_rgb_count(v).rgb / 255.0;
                 result.rgb = MODE == 2u ? rgb * grid.params.x : (MODE == 3u ? vec3(0.0) : rgb);
-                if (MODE == 4u) result.rgb = imageLoad(vox_radiance, w.c).rgb * grid.params.z;
+                if (MODE == 4u) result.rgb = imageLoad(vox_radiance, t).rgb * grid.params.z;
                 break;
             }
             if (!voxel_walk_step(w, int(res))) break;

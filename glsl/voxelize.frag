@@ -7,6 +7,8 @@
 // sampled with the derivatives of this voxel-resolution raster, so at the mip level of one
 // voxel's footprint; an alpha-masked surface voxelizes only where its coverage over that
 // footprint reaches the cutoff (the mask's mips keep the coverage, render::texture).
+// With bricked volumes the same shader first runs with MARK set: it writes nothing but marks
+// every brick the voxels it touches need (bricks.glsl), for the allocation that follows.
 #include "common.glsl"
 #include "scene.glsl"
 #include "material.glsl"
@@ -18,6 +20,7 @@
 layout(constant_id = 0) const uint TEXTURE_COUNT = 1;
 layout(constant_id = 2) const bool HAS_EMISSION = false;
 layout(constant_id = 3) const bool HAS_FLAGS = false;
+layout(constant_id = 4) const bool MARK = false;
 
 layout(set = 0, binding = 2, std430) readonly buffer Materials { Material materials[]; };
 layout(set = 0, binding = 3) uniform texture2D textures[TEXTURE_COUNT];
@@ -27,6 +30,8 @@ layout(set = 0, binding = 5, r32ui) uniform coherent uimage3D vox_albedo;
 layout(set = 0, binding = 6, r32ui) uniform coherent uimage3D vox_normal;
 layout(set = 0, binding = 7, r32ui) uniform coherent uimage3D vox_emission;
 layout(set = 0, binding = 8, r8ui) uniform uimage3D vox_flags;
+layout(set = 0, binding = 11, r32ui) uniform uimage3D brick_maps[4];
+#include "bricks.glsl"
 
 layout(push_constant) uniform Push { uint mark_static; } pc;
 
@@ -41,6 +46,30 @@ layout(location = 6) flat in vec3 g_t2;
 DEFINE_ATOMIC_AVERAGE(average_albedo, vox_albedo)
 DEFINE_ATOMIC_AVERAGE(average_normal, vox_normal)
 DEFINE_ATOMIC_AVERAGE(average_emission, vox_emission)
+
+void mark_brick(int p, ivec3 b) {
+    switch (p) {
+        case 0: imageAtomicCompSwap(brick_maps[0], b, 0u, BRICK_PENDING); break;
+        case 1: imageAtomicCompSwap(brick_maps[1], b, 0u, BRICK_PENDING); break;
+        case 2: imageAtomicCompSwap(brick_maps[2], b, 0u, BRICK_PENDING); break;
+        default: imageAtomicCompSwap(brick_maps[3], b, 0u, BRICK_PENDING); break;
+    }
+}
+
+// The bricks voxel vc needs: its own full-resolution brick, and on each pooled directional
+// level the brick of the texel over it and the brick whose apron holds that texel.
+void mark_bricks(ivec3 vc) {
+    mark_brick(0, vc >> 3);
+    for (int l = 0; l < int(grid.dims.y); ++l) {
+        ivec3 t = vc >> (l + 1);
+        ivec3 lo = t >> 3, hi = (t + 1) >> 3;
+        for (int z = lo.z; z <= hi.z; ++z) {
+            for (int y = lo.y; y <= hi.y; ++y) {
+                for (int x = lo.x; x <= hi.x; ++x) mark_brick(l + 1, ivec3(x, y, z));
+            }
+        }
+    }
+}
 
 void list_append(ivec3 c) {
     uint i = atomicAdd(vlist.occupied.count, 1u);
@@ -91,17 +120,23 @@ void main() {
         vec3 voxel = from_uvw(vec3(px, k), g_axis);
         if (!triangle_box_overlap(voxel + 0.5, vec3(0.5), g_t0, g_t1, g_t2)) continue;
         ivec3 vc = ivec3(voxel);
+        if (MARK) {
+            mark_bricks(vc);
+            continue;
+        }
+        ivec3 vt = full_texel(vc);  // resident: the mark pass marked its brick
+        if (vt.x < 0) continue;
         // Dynamic geometry leaves static voxels alone: the dynamic clear keeps them, so every
         // update would average its samples in again and the static voxel would drift toward
         // the dynamic object's albedo and normal until its sample count saturates.
-        if (HAS_FLAGS && pc.mark_static == 0u && imageLoad(vox_flags, vc).r != 0u) continue;
-        if (average_albedo(vc, albedo)) list_append(vc);
-        average_normal(vc, nrm * 0.5 + 0.5);
+        if (HAS_FLAGS && pc.mark_static == 0u && imageLoad(vox_flags, vt).r != 0u) continue;
+        if (average_albedo(vt, albedo)) list_append(vc);
+        average_normal(vt, nrm * 0.5 + 0.5);
         if (HAS_EMISSION) {
-            average_emission(vc, emission);  // zeros too: a half-emissive voxel emits half
+            average_emission(vt, emission);  // zeros too: a half-emissive voxel emits half
         }
         if (HAS_FLAGS && pc.mark_static != 0u) {
-            imageStore(vox_flags, vc, uvec4(1u));
+            imageStore(vox_flags, vt, uvec4(1u));
         }
     }
 }

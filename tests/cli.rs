@@ -128,12 +128,50 @@ fn info_reports_device_and_queue_topology() {
     }
 }
 
+/// `info` describes the bricked layout (the default): the passes that make bricks resident,
+/// the resident bricks of each pool against its slots and the grid, and the memory against the
+/// dense layout's.
+#[test]
+fn info_describes_the_bricked_voxel_layout() {
+    let o = dvsgi_with(&["info", "scenes/cornell-box.toml", "--set", "gi.voxel_resolution=256"], &[]);
+    let out = stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.contains("voxel clear -> mark bricks static -> allocate bricks static -> voxelize static"), "{out}");
+    let layout = out.lines().find_map(|l| l.strip_prefix("  voxel layout: bricks of 8³, ")).expect(&out);
+    // "X MiB of volumes, maps and lists (R of the dense layout's D MiB)"
+    let ratio: f64 =
+        layout.split(" (").nth(1).and_then(|r| r.split(' ').next()).and_then(|r| r.parse().ok()).expect(layout);
+    assert!(ratio > 0.0 && ratio < 0.5, "{layout}");
+    // 256^3 pools the full resolution and the directional level 0 (128^3 > 64^3).
+    let pools: Vec<&str> = out.lines().filter(|l| l.starts_with("  bricks, ")).collect();
+    assert_eq!(pools.len(), 2, "{out}");
+    assert!(pools[0].contains("full resolution (256³ texels, 8³ per brick)"), "{out}");
+    assert!(pools[1].contains("directional level 0 (128³ texels, 9³ per brick)"), "{out}");
+    for p in pools {
+        // "N resident of C slots, M bricks in the grid": 0 < N <= C < M.
+        let num = |after: &str| -> u64 {
+            p.split(after).next().and_then(|s| s.rsplit(' ').next()).and_then(|n| n.parse().ok()).expect(p)
+        };
+        let (n, c, m) = (num(" resident of"), num(" slots,"), num(" bricks in the grid"));
+        assert!(0 < n && n <= c && c < m, "{p}");
+    }
+}
+
 /// With voxel GI on a static scene: voxel clear + static voxelization, albedo and normal
 /// volumes with their memory, and no emission volume, flag volume or dynamic passes.
 #[test]
 fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
     let o = dvsgi_with(
-        &["info", "scenes/cornell-box.toml", "--set", "gi.mode=\"vct\"", "--set", "gi.voxel_resolution=32"],
+        &[
+            "info",
+            "scenes/cornell-box.toml",
+            "--set",
+            "gi.mode=\"vct\"",
+            "--set",
+            "gi.voxel_resolution=32",
+            "--set",
+            "gi.voxel_layout=\"dense\"",
+        ],
         &[],
     );
     let out = stdout(&o);
@@ -150,7 +188,7 @@ fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
     let occupied: u64 = words[4].parse().expect(line);
     assert!(words[5..7] == ["of", "32³"] && (1000..8000).contains(&occupied), "{line}");
     assert!(line.contains(&format!("{occupied} static")), "{line}");
-    assert!(out.contains("in 8³ bricks"), "{out}");
+    assert!(out.contains("voxel layout: dense"), "{out}");
     for absent in
         ["voxel emission", "voxel static flags", "voxel clear dynamic", "voxelize dynamic", "gi specular", "gi shadow"]
     {
@@ -223,7 +261,8 @@ fn voxel_view_renders() {
     let out = stdout(&o);
     assert!(
         out.contains(
-            "passes: frame data upload -> voxel clear -> voxelize static -> voxel list (static) -> voxel view -> tonemap"
+            "passes: frame data upload -> voxel clear -> mark bricks static -> allocate bricks static -> \
+             voxelize static -> voxel list (static) -> voxel view -> tonemap"
         ),
         "{out}"
     );

@@ -26,6 +26,8 @@ fn memory_estimate_matches_what_is_allocated() {
     let ctx = context();
     for (label, o) in [
         ("cornell 64^3", vec![("gi.voxel_resolution", "64")]),
+        ("cornell 256^3, bricks pooling the directional level 0", vec![("gi.voxel_resolution", "256")]),
+        ("cornell 64^3 dense", vec![("gi.voxel_resolution", "64"), ("gi.voxel_layout", "\"dense\"")]),
         ("glossy, 2 bounces, cone shadows, 1/2 res", vec![("gi.voxel_resolution", "64"), ("gi.bounces", "2")]),
         ("rsm, 6 faces of 256^2, 1/2 res", vec![("gi.mode", "\"rsm\""), ("gi.downsample", "2")]),
         ("lpv 16^3, 6 faces of 256^2", vec![("gi.mode", "\"lpv\"")]),

@@ -25,13 +25,17 @@ fn dvsgi_command() -> Command {
 /// None (the test is skipped, saying why) where the namespace cannot be made. A file-size
 /// limit (`ulimit -f`) cannot stand in for the full disk: Mesa 25's lavapipe backs device
 /// memory with memfd files, which the limit also caps (the process dies of SIGBUS).
-fn dvsgi_on_a_full_disk(files: &[(&str, &[u8])], args: impl Fn(&Path) -> Vec<String>) -> Option<(Output, tempfile::TempDir)> {
+fn dvsgi_on_a_full_disk(
+    files: &[(&str, &[u8])],
+    args: impl Fn(&Path) -> Vec<String>,
+) -> Option<(Output, tempfile::TempDir)> {
     let probe = Command::new("unshare").args(["-rm", "true"]).stderr(Stdio::null()).status();
     if !probe.is_ok_and(|s| s.success()) {
         eprintln!("skipped: `unshare -rm` (a user and mount namespace for a tmpfs) is not available here");
         return None;
     }
-    let (seed, mount, snapshot) = (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
+    let (seed, mount, snapshot) =
+        (tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap(), tempfile::tempdir().unwrap());
     for (name, bytes) in files {
         std::fs::write(seed.path().join(name), bytes).unwrap();
     }

@@ -2,23 +2,89 @@
 // The including shader declares, before including this file (GiParams is in cone_params.glsl):
 //   uniform GridBlock { VoxelGrid grid; };        uniform GiBlock { GiParams gi; };
 //   uniform sampler3D vox_lod0;                   (full-resolution radiance, RGBA16F)
-//   uniform sampler3D aniso[6];                   (+x, -x, +y, -y, +z, -z directional volumes)
+//   uniform sampler3D aniso[6];                   (+x, -x, +y, -y, +z, -z directional volumes:
+//                                                  their dense levels, bricks.glsl)
+//   layout(r32ui) uniform readonly uimage3D brick_maps[4];
+//   uniform texture3D aniso_pool[18];             (pooled directional levels: 6 per level)
+//   uniform sampler pool_sampler;
 // Positions are in voxel units: 0..res along each axis of the grid.
 #ifndef DVSGI_CONE_GLSL
 #define DVSGI_CONE_GLSL
 #include "common.glsl"
 #include "voxel.glsl"
+#include "bricks.glsl"
 #include "cone_params.glsl"
+
+// Directional volume `face` (literal) of pooled level l (0..2): trilinear within one brick.
+#define POOLED_FACE(face, l, pos)                                                              \
+    (l == 0 ? pooled_lookup(aniso_pool[face], 1, pos)                                           \
+            : (l == 1 ? pooled_lookup(aniso_pool[6 + face], 2, pos) : pooled_lookup(aniso_pool[12 + face], 3, pos)))
+
+vec4 pooled_lookup(texture3D pool_image, int pool, vec3 pos) {
+    vec4 q = level_lookup(pool, pos);
+    if (q.w == 0.0) return vec4(0.0);
+    vec3 extent = vec3(grid.pools[pool].xyz * 9u);
+    return textureLod(sampler3D(pool_image, pool_sampler), q.xyz / extent, 0.0);
+}
+
+// The directional volumes at integer level l, blended by the squared components of `dir`.
+vec4 anisotropic_level(vec3 uvw, vec3 dir, int l) {
+    vec3 w = dir * dir;
+    vec4 x, y, z;
+    int pooled = int(grid.dims.y);
+    if (l >= pooled) {
+        float d = float(l - pooled);
+        x = dir.x >= 0.0 ? textureLod(aniso[0], uvw, d) : textureLod(aniso[1], uvw, d);
+        y = dir.y >= 0.0 ? textureLod(aniso[2], uvw, d) : textureLod(aniso[3], uvw, d);
+        z = dir.z >= 0.0 ? textureLod(aniso[4], uvw, d) : textureLod(aniso[5], uvw, d);
+    } else {
+        vec3 pos = uvw * float(pool_level_side(l + 1));
+        x = dir.x >= 0.0 ? POOLED_FACE(0, l, pos) : POOLED_FACE(1, l, pos);
+        y = dir.y >= 0.0 ? POOLED_FACE(2, l, pos) : POOLED_FACE(3, l, pos);
+        z = dir.z >= 0.0 ? POOLED_FACE(4, l, pos) : POOLED_FACE(5, l, pos);
+    }
+    return (x * w.x + y * w.y + z * w.z) / max(w.x + w.y + w.z, 1e-12);
+}
 
 // The directional volumes at `level`, blended by the squared components of `dir` (the
 // direction the cone travels): the volume integrated along +x serves cones going +x.
-// Returns (L * tau, tau) (voxel.glsl).
+// Returns (L * tau, tau) (voxel.glsl). Dense levels blend between levels in the sampler;
+// pooled ones (one image per level) here.
 vec4 sample_anisotropic(vec3 uvw, vec3 dir, float level) {
-    vec3 w = dir * dir;
-    vec4 x = dir.x >= 0.0 ? textureLod(aniso[0], uvw, level) : textureLod(aniso[1], uvw, level);
-    vec4 y = dir.y >= 0.0 ? textureLod(aniso[2], uvw, level) : textureLod(aniso[3], uvw, level);
-    vec4 z = dir.z >= 0.0 ? textureLod(aniso[4], uvw, level) : textureLod(aniso[5], uvw, level);
-    return (x * w.x + y * w.y + z * w.z) / max(w.x + w.y + w.z, 1e-12);
+    int pooled = int(grid.dims.y);
+    if (float(pooled) <= level) {
+        vec3 w = dir * dir;
+        float d = level - float(pooled);
+        vec4 x = dir.x >= 0.0 ? textureLod(aniso[0], uvw, d) : textureLod(aniso[1], uvw, d);
+        vec4 y = dir.y >= 0.0 ? textureLod(aniso[2], uvw, d) : textureLod(aniso[3], uvw, d);
+        vec4 z = dir.z >= 0.0 ? textureLod(aniso[4], uvw, d) : textureLod(aniso[5], uvw, d);
+        return (x * w.x + y * w.y + z * w.z) / max(w.x + w.y + w.z, 1e-12);
+    }
+    int l = int(floor(level));
+    float f = level - float(l);
+    vec4 a = anisotropic_level(uvw, dir, l);
+    return f > 0.0 ? mix(a, anisotropic_level(uvw, dir, l + 1), f) : a;
+}
+
+// One full-resolution texel of the radiance the cones sample; empty outside the grid and
+// where its brick is not resident.
+vec4 full_fetch(ivec3 c) {
+    ivec3 t = full_texel(c);
+    return t.x < 0 ? vec4(0.0) : texelFetch(vox_lod0, t, 0);
+}
+
+// The full-resolution radiance, trilinear: by the sampler when dense, by eight lookups when
+// bricked (its bricks have no apron).
+vec4 sample_full(vec3 uvw) {
+    if (!bricked()) return textureLod(vox_lod0, uvw, 0.0);
+    vec3 p = uvw * float(grid.dims.x) - 0.5;
+    ivec3 c = ivec3(floor(p));
+    vec3 f = p - vec3(c);
+    vec4 x00 = mix(full_fetch(c), full_fetch(c + ivec3(1, 0, 0)), f.x);
+    vec4 x10 = mix(full_fetch(c + ivec3(0, 1, 0)), full_fetch(c + ivec3(1, 1, 0)), f.x);
+    vec4 x01 = mix(full_fetch(c + ivec3(0, 0, 1)), full_fetch(c + ivec3(1, 0, 1)), f.x);
+    vec4 x11 = mix(full_fetch(c + ivec3(0, 1, 1)), full_fetch(c + ivec3(1, 1, 1)), f.x);
+    return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
 }
 
 // Quadrilinear sample at voxel-space position g and level of detail `lod` (log2 of the
@@ -31,7 +97,7 @@ vec4 sample_voxels(vec3 g, vec3 dir, float lod) {
     lod = clamp(lod, 0.0, top);
     if (lod < 1.0) {
         // Occupied full-resolution voxels (radiance L, alpha 1) have optical depth VOXEL_TAU.
-        vec4 full = textureLod(vox_lod0, uvw, 0.0) * VOXEL_TAU;
+        vec4 full = sample_full(uvw) * VOXEL_TAU;
         if (lod <= 0.0) return full;
         return mix(full, sample_anisotropic(uvw, dir, 0.0), lod);
     }

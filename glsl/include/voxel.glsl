@@ -4,9 +4,12 @@
 
 struct VoxelGrid {
     vec4 origin;     // xyz world position of the grid's min corner, w voxel size (world units)
-    uvec4 dims;      // x voxels per side
+    uvec4 dims;      // x voxels per side; y directional levels in brick pools (bricks.glsl);
+                     // z 1 when the volumes are bricked, 0 when dense
     vec4 params;     // x emission scale: voxels store emission / scale in 8 bits;
                      // y radiance scale: radiance volumes hold radiance * y; z = 1/y
+    uvec4 pools[4];  // brick pools (render::bricks): xyz slots per axis of the pool image,
+                     // w bricks per side of its map; 0 full resolution, 1.. directional levels
 };
 
 // Opacity in the cone-traced volumes is kept as optical depth: a directional texel holds

@@ -706,8 +706,8 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
     Ok(())
 }
 
-/// Voxelize (one frame at the scene time) and print what the grid holds: occupied voxels,
-/// occupied bricks, and what the full-resolution volumes would take in a bricked layout.
+/// Voxelize (one frame at the scene time) and print what the grid holds: occupied voxels and
+/// bricks, the layout's resident bricks per pool, and its memory against the dense layout's.
 fn occupancy(renderer: &mut Renderer, time: f32) -> dvsgi::Result<()> {
     if renderer.voxels().is_none() {
         return Ok(());
@@ -717,18 +717,24 @@ fn occupancy(renderer: &mut Renderer, time: f32) -> dvsgi::Result<()> {
     let o = list.occupancy();
     outln!("  occupied voxels (first frame): {}", o.summary());
     let v = renderer.voxels().expect("voxels");
-    let full: u64 = v.full_resolution().iter().map(|i| i.bytes).sum();
-    let per_voxel = full as f64 / o.voxels as f64;
-    let mib = |b: f64| b / (1024.0 * 1024.0);
-    for side in [4u32, 8] {
-        // Occupied bricks stored whole, plus a 4-byte page-table entry per brick of the grid.
-        let sparse = o.bricks(side) as f64 * f64::from(side).powi(3) * per_voxel + 4.0 * o.brick_slots(side) as f64;
-        outln!(
-            "  full-resolution volumes: {:.2} MiB dense; in {side}³ bricks {:.2} MiB ({:.1}%)",
-            mib(full as f64),
-            mib(sparse),
-            100.0 * sparse / full as f64
-        );
+    let bytes: u64 = v.all().iter().map(|i| i.bytes).sum();
+    let per_texel: u64 = v.full_resolution().iter().map(|i| i.bytes / i.desc.texel_count().max(1)).sum();
+    let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+    let mut dense_scene = renderer.scene.clone();
+    dense_scene.settings.gi.voxel_layout = dvsgi::scene::VoxelLayout::Dense;
+    let dense = dvsgi::render::budget::Estimate::of(&dense_scene).volumes;
+    let Some(snapshot) = renderer.resident_bricks()? else {
+        outln!("  voxel layout: dense ({:.2} MiB of volumes)", mib(bytes));
+        return Ok(());
+    };
+    outln!(
+        "  voxel layout: bricks of 8³, {:.2} MiB of volumes, maps and lists ({:.3} of the dense layout's {:.2} MiB)",
+        mib(bytes),
+        bytes as f64 / dense.max(1) as f64,
+        mib(dense)
+    );
+    for line in snapshot.summary(per_texel) {
+        outln!("  {line}");
     }
     Ok(())
 }

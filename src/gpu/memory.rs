@@ -168,6 +168,19 @@ impl ImageDesc {
             usage,
         }
     }
+    /// Texels of level 0.
+    pub fn texel_count(&self) -> u64 {
+        u64::from(self.extent.width)
+            * u64::from(self.extent.height)
+            * u64::from(self.extent.depth)
+            * u64::from(self.layers)
+    }
+
+    /// A 3D image of `extent` texels (a brick pool), one mip level.
+    pub fn d3_extent(format: vk::Format, extent: [u32; 3], usage: vk::ImageUsageFlags) -> Self {
+        let [width, height, depth] = extent;
+        ImageDesc { extent: vk::Extent3D { width, height, depth }, ..Self::d3(format, 1, 1, usage) }
+    }
     pub fn aspect(&self) -> vk::ImageAspectFlags {
         match self.format {
             vk::Format::D32_SFLOAT | vk::Format::D16_UNORM | vk::Format::X8_D24_UNORM_PACK32 => {

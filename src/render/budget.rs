@@ -4,9 +4,10 @@
 //! `memory_estimate_matches_what_is_allocated` keeps it within 10% of what is really allocated.
 
 use crate::gpu::{Context, GpuError, GpuResult};
+use crate::render::bricks::BrickLayout;
 use crate::render::frame::cone_shadows;
 use crate::render::voxel::{list_capacity, VoxelGrid, VoxelNeeds};
-use crate::scene::{GiMode, Scene, View};
+use crate::scene::{GiMode, Scene, View, VoxelLayout};
 
 /// What a device offers (`DeviceInfo`'s memory figures).
 pub struct Limits<'a> {
@@ -68,7 +69,11 @@ impl Estimate {
         if s.gi.mode == GiMode::Vct || voxel_view {
             let needs = VoxelNeeds::of(scene);
             let res = s.gi.voxel_resolution as u64;
-            let n = res * res * res;
+            let grid = VoxelGrid::for_scene(scene);
+            let layout =
+                (s.gi.voxel_layout == VoxelLayout::Bricks).then(|| BrickLayout::for_scene(scene, &grid, needs.cones));
+            // Texels of each full-resolution volume: N^3, or its pool of bricks.
+            let n = layout.as_ref().map_or(res * res * res, |l| l.pools[0].texels());
             let mut vols = vec![4 * n, 4 * n, 8 * n]; // albedo, normal (R32_UINT), radiance (RGBA16F)
             if needs.emission {
                 vols.push(4 * n);
@@ -79,6 +84,16 @@ impl Estimate {
             if needs.bounces > 0 {
                 vols.extend([8 * n, 8 * n]); // bounced radiance and the bounce's scratch volume
             }
+            let pooled = layout.as_ref().map_or(0, |l| l.pools.len() as u32 - 1);
+            if let Some(l) = &layout {
+                // The maps (R32_UINT per brick), the resident-brick lists, and the pooled
+                // directional levels (six RGBA16F volumes each).
+                vols.extend(l.pools.iter().map(|p| 4 * p.map_entries()));
+                vols.push(128 + 4 * l.pools.iter().map(|p| u64::from(p.capacity)).sum::<u64>());
+                if needs.cones {
+                    vols.extend(l.pools[1..].iter().flat_map(|p| [8 * p.texels(); 6]));
+                }
+            }
             // The work list of occupied voxels (a 64-byte header and 4 bytes per voxel the
             // triangles can occupy), and with dynamic objects the stale list.
             let capacity = list_capacity(scene, &VoxelGrid::for_scene(scene));
@@ -87,8 +102,10 @@ impl Estimate {
                 vols.push(4 * capacity.max(1));
             }
             if needs.cones {
-                // Six RGBA16F volumes at half resolution with full mip chains.
-                let chain: u64 = (0..s.gi.voxel_resolution.trailing_zeros()).map(|l| ((res / 2) >> l).pow(3) * 8).sum();
+                // Six RGBA16F volumes at half resolution with full mip chains (the levels
+                // that are not pooled).
+                let chain: u64 =
+                    (pooled..s.gi.voxel_resolution.trailing_zeros()).map(|l| ((res / 2) >> l).pow(3) * 8).sum();
                 vols.extend([chain; 6]);
                 if !voxel_view {
                     let specular = s.gi.specular && scene.materials.iter().any(|m| m.is_glossy());

@@ -13,6 +13,7 @@ use super::passes::shadow::ShadowPass;
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::upload::UploadPass;
 use super::passes::voxel_bounce::{BounceComposePass, VoxelBouncePass};
+use super::passes::voxel_bricks::BrickAllocPass;
 use super::passes::voxel_clear::{DynamicClearPass, VoxelClearPass};
 use super::passes::voxel_light::VoxelLightPass;
 use super::passes::voxel_list::{ListKeeper, ListStep, VoxelListPass};
@@ -31,6 +32,8 @@ use std::sync::Arc;
 pub struct VoxelPasses {
     pub volumes: Arc<VoxelVolumes>,
     pub clear: VoxelClearPass,
+    /// With bricked volumes: the bricks static geometry needs, made resident.
+    pub bricks_static: Option<BrickPasses>,
     pub voxelize_static: VoxelizePass,
     /// Closes the work list of occupied voxels after static voxelization.
     pub list_static: VoxelListPass,
@@ -47,8 +50,40 @@ pub struct VoxelPasses {
 /// them again, close the list.
 pub struct DynamicPasses {
     pub clear: DynamicClearPass,
+    /// With bricked volumes: bricks the objects reach anew, made resident.
+    pub bricks: Option<BrickPasses>,
     pub voxelize: VoxelizePass,
     pub list: VoxelListPass,
+}
+
+/// Making bricks resident before a voxelization: the marking run over the same geometry, then
+/// the allocation of the marked bricks.
+pub struct BrickPasses {
+    pub mark: VoxelizePass,
+    pub allocate: BrickAllocPass,
+}
+
+impl BrickPasses {
+    fn new(
+        ctx: &Arc<Context>,
+        voxelizer: &Arc<Voxelizer>,
+        volumes: &Arc<VoxelVolumes>,
+        dynamic: bool,
+    ) -> GpuResult<Option<Self>> {
+        let (Some(mark), Some(allocate)) =
+            (VoxelizePass::marking(voxelizer, dynamic), BrickAllocPass::new(ctx, volumes, dynamic)?)
+        else {
+            return Ok(None);
+        };
+        Ok(Some(BrickPasses { mark, allocate }))
+    }
+
+    fn push<'a>(this: &'a Option<Self>, passes: &mut Vec<&'a dyn Pass>) {
+        if let Some(b) = this {
+            passes.push(&b.mark);
+            passes.push(&b.allocate);
+        }
+    }
 }
 
 /// The passes of a bounce step: a bounce gathering indirect light into the scratch volume, the
@@ -339,6 +374,7 @@ impl FramePasses {
             let dynamic = if volumes.needs.dynamic {
                 Some(DynamicPasses {
                     clear: DynamicClearPass::new(ctx, &volumes, &keeper)?,
+                    bricks: BrickPasses::new(ctx, &voxelizer, &volumes, true)?,
                     voxelize: VoxelizePass::new(&voxelizer, true),
                     list: VoxelListPass::new(&keeper, ListStep::Dynamic),
                 })
@@ -365,6 +401,7 @@ impl FramePasses {
             Some(VoxelPasses {
                 light: VoxelLightPass::new(ctx, frame, &volumes, &atlas, &s.gi)?,
                 clear: VoxelClearPass::new(&volumes),
+                bricks_static: BrickPasses::new(ctx, &voxelizer, &volumes, false)?,
                 voxelize_static: VoxelizePass::new(&voxelizer, false),
                 list_static: VoxelListPass::new(&keeper, ListStep::Static),
                 dynamic,
@@ -509,11 +546,13 @@ impl FramePasses {
         if let Some(v) = &self.voxels {
             if !state.static_voxelized {
                 passes.push(&v.clear);
+                BrickPasses::push(&v.bricks_static, &mut passes);
                 passes.push(&v.voxelize_static);
                 passes.push(&v.list_static);
             }
             if let (true, Some(d)) = (state.revoxelize || !state.static_voxelized, &v.dynamic) {
                 passes.push(&d.clear);
+                BrickPasses::push(&d.bricks, &mut passes);
                 passes.push(&d.voxelize);
                 passes.push(&d.list);
             }

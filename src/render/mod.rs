@@ -1,6 +1,7 @@
 //! The renderer: scene upload, per-frame data, and frame submission. What a frame runs is in
 //! [`frame`]; how barriers are derived is in [`graph`].
 
+pub mod bricks;
 pub mod budget;
 pub mod cones;
 pub mod frame;
@@ -321,6 +322,49 @@ impl Renderer {
         self.scheduler.end(true)?;
         let stale_bytes = stale.as_ref().map(|s| s.bytes().to_vec()).unwrap_or_default();
         Ok(Some(voxel::ListSnapshot::decode(v.grid.resolution, entries.bytes(), &stale_bytes)))
+    }
+
+    /// A full-resolution voxel volume as N^3 texels (x fastest), whatever its layout: a
+    /// bricked volume is put together from its pool through the map, empty where no brick is
+    /// resident (waits; for tests and debugging).
+    pub fn download_voxels(&mut self, image: &Arc<crate::gpu::Image>) -> GpuResult<Vec<u8>> {
+        self.download_pooled(image, 0)
+    }
+
+    /// Level `level` of a directional volume (`face` 0..6: +x, -x, +y, -y, +z, -z) as texels,
+    /// whatever its layout (waits; for tests and debugging).
+    pub fn download_directional(&mut self, face: usize, level: u32) -> GpuResult<Vec<u8>> {
+        let v = self.passes.voxels.as_ref().map(|v| v.volumes.clone()).expect("voxel volumes");
+        let pooled = v.bricks.as_ref().map_or(0, |b| b.directional.len() as u32);
+        if level < pooled {
+            let image = v.bricks.as_ref().expect("bricks").directional[level as usize][face].clone();
+            return self.download_pooled(&image, level as usize + 1);
+        }
+        self.download_level(&v.directional[face], level - pooled)
+    }
+
+    /// An image of pool `pool` as the dense texels of its level (an image of a dense volume
+    /// as it is).
+    fn download_pooled(&mut self, image: &Arc<crate::gpu::Image>, pool: usize) -> GpuResult<Vec<u8>> {
+        let v = self.passes.voxels.as_ref().map(|v| v.volumes.clone()).expect("voxel volumes");
+        let Some(b) = &v.bricks else { return self.download(image) };
+        let pooled = self.download(image)?;
+        let map: Vec<u32> = bytemuck::pod_collect_to_vec(&self.download(&b.maps[pool])?);
+        let texel = pooled.len() / image.desc.texel_count() as usize;
+        Ok(bricks::unpool(&b.layout.pools[pool], &pooled, &map, texel))
+    }
+
+    /// Read the resident bricks of every pool back (waits; after a frame, never inside one).
+    /// None with dense volumes.
+    pub fn resident_bricks(&mut self) -> GpuResult<Option<bricks::BrickSnapshot>> {
+        let Some(v) = self.passes.voxels.as_ref().map(|v| v.volumes.clone()) else { return Ok(None) };
+        let Some(b) = &v.bricks else { return Ok(None) };
+        let ctx = self.ctx.clone();
+        let all = passes::voxel_list::BufferDownload::new(&ctx, &b.lists, 0, b.lists.size)?;
+        self.scheduler.begin(None)?;
+        self.scheduler.record(&[&all, &passes::readback::HostReadPass { buffers: vec![all.buffer.clone()] }])?;
+        self.scheduler.end(true)?;
+        Ok(Some(bricks::BrickSnapshot::decode(&b.layout, all.bytes())))
     }
 
     /// The schedule mode of the next frames.

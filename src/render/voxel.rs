@@ -3,9 +3,10 @@
 //! boundary are not on the grid's faces). Volumes are created only when the scene needs them.
 
 use crate::gpu::{Access, Bind, Buffer, Context, GpuError, GpuResult, Image, ImageDesc, Sampler};
+use crate::render::bricks::{BrickLayout, Bricks, MAX_POOLS};
 use crate::render::cones::GpuGiParams;
 use crate::render::graph::Use;
-use crate::scene::{Aabb, GiMode, GiSettings, Scene, View};
+use crate::scene::{Aabb, GiMode, GiSettings, Scene, View, VoxelLayout};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -20,6 +21,7 @@ pub struct GpuVoxelGrid {
     pub origin: [f32; 4],
     pub dims: [u32; 4],
     pub params: [f32; 4],
+    pub pools: [[u32; 4]; MAX_POOLS],
 }
 
 /// Placement of the cubic grid in world space.
@@ -123,6 +125,13 @@ pub struct VoxelVolumes {
     pub diffuse_rays: u32,
     /// The work list of occupied voxels the voxel passes dispatch over.
     pub list: VoxelList,
+    /// With `gi.voxel_layout = "bricks"`: the maps, pools and lists of resident bricks. The
+    /// full-resolution volumes above are then pools of bricks, and `directional` holds only
+    /// the dense levels (those of at most 64^3 texels).
+    pub bricks: Option<Bricks>,
+    /// Bound in place of the brick maps and pooled levels that do not exist.
+    pub map_placeholder: Arc<Image>,
+    pub pool_placeholder: Arc<Image>,
 }
 
 /// Byte offsets of the list header (`VoxelListBlock` in glsl/include/voxel_list.glsl): each
@@ -198,7 +207,7 @@ pub fn list_capacity(scene: &Scene, grid: &VoxelGrid) -> u64 {
 
 /// The largest factor by which an object's model matrix can stretch a length at any time
 /// (its static transform's, times the largest keyframe scale).
-fn object_max_scale(o: &crate::scene::Object) -> f32 {
+pub(crate) fn object_max_scale(o: &crate::scene::Object) -> f32 {
     let c = [o.transform.x_axis.truncate(), o.transform.y_axis.truncate(), o.transform.z_axis.truncate()];
     let len = c.map(|v| v.length());
     // Translate-rotate-scale (what scene files build) has orthogonal columns: the largest
@@ -246,19 +255,23 @@ impl VoxelVolumes {
         let res = grid.resolution;
         let usage =
             vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC;
-        let volume = |name: &str, format| Image::new(ctx, name, ImageDesc::d3(format, res, 1, usage)).map(Arc::new);
+        let bricks = (scene.settings.gi.voxel_layout == VoxelLayout::Bricks)
+            .then(|| Bricks::new(ctx, BrickLayout::for_scene(scene, &grid, needs.cones)))
+            .transpose()?;
+        // Full-resolution volumes: N^3, or the pool of their resident bricks.
+        let full_extent = bricks.as_ref().map_or([res; 3], |b| b.layout.pools[0].extent());
+        let volume =
+            |name: &str, format| Image::new(ctx, name, ImageDesc::d3_extent(format, full_extent, usage)).map(Arc::new);
         let sampled = usage | vk::ImageUsageFlags::SAMPLED;
         let mip_levels = res.trailing_zeros(); // half resolution down to 1 voxel
+                                               // The directional levels that are not pooled.
+        let pooled = bricks.as_ref().map_or(0, |b| b.layout.pools.len() as u32 - 1);
         let directional = if needs.cones {
             ["+x", "-x", "+y", "-y", "+z", "-z"]
                 .iter()
                 .map(|d| {
-                    Image::new(
-                        ctx,
-                        &format!("voxel radiance {d}"),
-                        ImageDesc::d3(RADIANCE_VOLUME_FORMAT, res / 2, mip_levels, sampled),
-                    )
-                    .map(Arc::new)
+                    let desc = ImageDesc::d3(RADIANCE_VOLUME_FORMAT, (res / 2) >> pooled, mip_levels - pooled, sampled);
+                    Image::new(ctx, &format!("voxel radiance {d}"), desc).map(Arc::new)
                 })
                 .collect::<GpuResult<Vec<_>>>()?
         } else {
@@ -268,7 +281,10 @@ impl VoxelVolumes {
         let bounced = if needs.bounces > 0 {
             ["voxel radiance bounced", "voxel bounce scratch"]
                 .iter()
-                .map(|name| Image::new(ctx, name, ImageDesc::d3(RADIANCE_VOLUME_FORMAT, res, 1, sampled)).map(Arc::new))
+                .map(|name| {
+                    Image::new(ctx, name, ImageDesc::d3_extent(RADIANCE_VOLUME_FORMAT, full_extent, sampled))
+                        .map(Arc::new)
+                })
                 .collect::<GpuResult<Vec<_>>>()?
         } else {
             Vec::new()
@@ -303,17 +319,27 @@ impl VoxelVolumes {
             "voxel grid",
             &GpuVoxelGrid {
                 origin: [grid.origin.x, grid.origin.y, grid.origin.z, grid.voxel_size],
-                dims: [res, 0, 0, 0],
+                dims: [res, pooled, u32::from(bricks.is_some()), 0],
                 params: [emission_scale, radiance_scale, 1.0 / radiance_scale, 0.0],
+                pools: pool_uniforms(bricks.as_ref()),
             },
         )?;
+        let placeholder = |name: &str, format, usage| {
+            Image::new(ctx, name, ImageDesc::d3(format, 1, 1, usage | vk::ImageUsageFlags::TRANSFER_DST)).map(Arc::new)
+        };
+        let map_placeholder = placeholder("voxel brick map placeholder", vk::Format::R32_UINT, usage)?;
+        let pool_placeholder = placeholder("voxel brick pool placeholder", RADIANCE_VOLUME_FORMAT, sampled)?;
         Ok(VoxelVolumes {
             grid,
             needs,
             grid_buffer,
             albedo: volume("voxel albedo", vk::Format::R32_UINT)?,
-            radiance: Image::new(ctx, "voxel radiance", ImageDesc::d3(RADIANCE_VOLUME_FORMAT, res, 1, sampled))
-                .map(Arc::new)?,
+            radiance: Image::new(
+                ctx,
+                "voxel radiance",
+                ImageDesc::d3_extent(RADIANCE_VOLUME_FORMAT, full_extent, sampled),
+            )
+            .map(Arc::new)?,
             bounced,
             directional,
             gi_params,
@@ -332,13 +358,56 @@ impl VoxelVolumes {
             radiance_scale,
             diffuse_rays: scene.settings.gi.diffuse_rays,
             list: VoxelList::new(ctx, list_capacity(scene, &grid), needs.dynamic)?,
+            bricks,
+            map_placeholder,
+            pool_placeholder,
         })
     }
 
-    /// Every volume that exists, for clears and memory reports.
+    /// The brick maps (`brick_maps[4]` in bricks.glsl), placeholders where there are none.
+    pub fn brick_maps_bind(&self) -> Bind<'_> {
+        let maps = self.bricks.as_ref().map_or(&[][..], |b| &b.maps[..]);
+        Bind::StorageImageArray((0..MAX_POOLS).map(|i| maps.get(i).unwrap_or(&self.map_placeholder).view).collect())
+    }
+
+    /// Uses of the bound brick maps (each once) with `access`.
+    pub fn brick_map_uses(&self, access: Access) -> Vec<Use<'_>> {
+        let maps = self.bricks.as_ref().map_or(&[][..], |b| &b.maps[..]);
+        let mut uses: Vec<Use> = maps.iter().map(|m| Use::image(m, access)).collect();
+        if maps.len() < MAX_POOLS {
+            uses.push(Use::image(&self.map_placeholder, access));
+        }
+        uses
+    }
+
+    /// The pooled directional levels (`aniso_pool[18]` and `pool_sampler` in cone.glsl),
+    /// placeholders where there are none.
+    pub fn pool_binds(&self) -> [Bind<'_>; 2] {
+        let pooled = self.bricks.as_ref().map_or(&[][..], |b| &b.directional[..]);
+        let views = (0..3 * 6)
+            .map(|i| pooled.get(i / 6).map_or(self.pool_placeholder.view, |level| level[i % 6].view))
+            .collect();
+        [Bind::ImageArray(views, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL), Bind::Sampler(self.sampler.raw)]
+    }
+
+    /// Uses of the bound pooled levels (sampled in compute shaders).
+    pub fn pool_uses(&self) -> Vec<Use<'_>> {
+        let pooled = self.bricks.as_ref().map_or(&[][..], |b| &b.directional[..]);
+        let mut uses: Vec<Use> =
+            pooled.iter().flatten().map(|i| Use::image(i, Access::ComputeShaderReadSampled)).collect();
+        if pooled.len() < 3 {
+            uses.push(Use::image(&self.pool_placeholder, Access::ComputeShaderReadSampled));
+        }
+        uses
+    }
+
+    /// Every volume that exists, for clears and memory reports: with bricks their maps and
+    /// pooled levels too, and the placeholders (cleared once like the rest).
     pub fn all(&self) -> Vec<&Arc<Image>> {
         let mut v = self.full_resolution();
         v.extend(self.directional.iter());
+        v.extend(self.bricks.iter().flat_map(|b| b.images()));
+        v.extend([&self.map_placeholder, &self.pool_placeholder]);
         v
     }
 
@@ -516,6 +585,15 @@ impl Occupancy {
             bricks(8)
         )
     }
+}
+
+/// The pools' uniform (`VoxelGrid.pools`): slots per axis and map side of each pool.
+fn pool_uniforms(bricks: Option<&Bricks>) -> [[u32; 4]; MAX_POOLS] {
+    let mut u = [[1, 1, 1, 0]; MAX_POOLS];
+    for (i, p) in bricks.map_or(&[][..], |b| &b.layout.pools[..]).iter().enumerate() {
+        u[i] = [p.slots[0], p.slots[1], p.slots[2], p.map_side];
+    }
+    u
 }
 
 #[cfg(test)]

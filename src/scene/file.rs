@@ -373,6 +373,7 @@ pub(crate) const TOP_KEYS: &[&str] = &["scene", "camera", "render", "gi", "mater
 pub(crate) const GI_KEYS: &[&str] = &[
     "mode",
     "voxel_resolution",
+    "voxel_layout",
     "attenuation",
     "occlusion",
     "voxel_shadow_softness",

@@ -382,6 +382,16 @@ pub enum VoxelAttenuation {
     NDotL,
 }
 
+/// How the voxel volumes are stored (render::bricks).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum VoxelLayout {
+    /// N^3 texels per volume.
+    Dense,
+    /// Only the bricks of 8^3 texels that hold something, in pools found through a map.
+    Bricks,
+}
+
 /// How voxel lighting decides whether a light reaches a voxel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -433,6 +443,9 @@ pub struct GiSettings {
     pub mode: GiMode,
     /// Voxels along each side of the cubic grid: a power of two in 8..=512.
     pub voxel_resolution: u32,
+    /// How the voxel volumes are stored: bricks of 8^3 where the scene is (default), or
+    /// dense N^3 (docs/SPARSE.md).
+    pub voxel_layout: VoxelLayout,
     pub attenuation: VoxelAttenuation,
     pub occlusion: VoxelOcclusion,
     /// Ray-marched shadows only: 0 = hard; larger values soften with distance (nu accumulation).
@@ -511,6 +524,7 @@ impl Default for GiSettings {
         GiSettings {
             mode: GiMode::Vct,
             voxel_resolution: 128,
+            voxel_layout: VoxelLayout::Bricks,
             attenuation: VoxelAttenuation::NormalWeighted,
             occlusion: VoxelOcclusion::ShadowMap,
             voxel_shadow_softness: 0.0,

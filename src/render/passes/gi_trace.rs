@@ -112,6 +112,7 @@ impl GiTracePass {
         let v = volumes;
         let lod0 = v.final_radiance().clone();
         let [d, s, sh] = targets.binds(placeholders);
+        let [pool_images, pool_sampler] = v.pool_binds();
         let set = DescriptorSet::new(
             ctx,
             "gi trace",
@@ -129,6 +130,9 @@ impl GiTracePass {
                 d,
                 s,
                 sh,
+                v.brick_maps_bind(),
+                pool_images,
+                pool_sampler,
             ],
         )?;
         let pipeline = Pipeline::compute(
@@ -166,6 +170,8 @@ impl Pass for GiTracePass {
         uses.push(Use::image(&self.gbuffer.specular, Access::ComputeShaderReadSampled));
         uses.push(Use::image(&self.lod0, Access::ComputeShaderReadSampled));
         uses.extend(self.volumes.directional.iter().map(|d| Use::image(d, Access::ComputeShaderReadSampled)));
+        uses.extend(self.volumes.pool_uses());
+        uses.extend(self.volumes.brick_map_uses(Access::ComputeShaderReadStorage));
         uses.extend(self.targets.uses(&self.placeholders, Access::ComputeShaderWrite));
         uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
         uses

@@ -11,6 +11,7 @@ pub mod shadow;
 pub mod tonemap;
 pub mod upload;
 pub mod voxel_bounce;
+pub mod voxel_bricks;
 pub mod voxel_clear;
 pub mod voxel_light;
 pub mod voxel_list;

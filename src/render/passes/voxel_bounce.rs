@@ -34,6 +34,7 @@ impl VoxelBouncePass {
         let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let v = volumes;
         let name = format!("voxel bounce ({} -> {})", source.name, target.name);
+        let [pool_images, pool_sampler] = v.pool_binds();
         let set = DescriptorSet::new(
             ctx,
             &name,
@@ -48,6 +49,9 @@ impl VoxelBouncePass {
                 Bind::Uniform(&frame.uniforms),
                 Bind::StorageImage(target.view),
                 Bind::Storage(&v.list.buffer),
+                v.brick_maps_bind(),
+                pool_images,
+                pool_sampler,
             ],
         )?;
         let pipeline = Pipeline::compute(ctx, "voxel bounce", shaders::VOXEL_BOUNCE_COMP, &[set.layout], 0, &[])?;
@@ -78,6 +82,7 @@ impl Pass for VoxelBouncePass {
             Use::buffer(&self.frame.uniforms, Access::ComputeShaderReadBuffer),
         ];
         uses.extend(v.directional.iter().map(|d| Use::image(d, Access::ComputeShaderReadSampled)));
+        uses.extend(v.pool_uses());
         uses.extend(list_reads(v));
         uses
     }
@@ -112,6 +117,8 @@ impl BounceComposePass {
                 Bind::StorageImage(v.radiance.view),
                 Bind::StorageImage(v.bounced[1].view),
                 Bind::StorageImage(v.bounced[0].view),
+                Bind::Uniform(&v.grid_buffer),
+                v.brick_maps_bind(),
             ],
         )?;
         let pipeline =

@@ -27,6 +27,7 @@ impl Pass for VoxelClearPass {
         let mut uses: Vec<Use> =
             self.volumes.all().into_iter().map(|v| Use::overwrite(v, Access::TransferWrite)).collect();
         uses.push(Use::buffer(&self.volumes.list.buffer, Access::TransferWrite));
+        uses.extend(self.volumes.bricks.iter().map(|b| Use::buffer(&b.lists, Access::TransferWrite)));
         uses
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
@@ -43,6 +44,11 @@ impl Pass for VoxelClearPass {
         }
         // An empty list: no entries, no groups in any range.
         unsafe { ctx.device.cmd_fill_buffer(cmd, self.volumes.list.buffer.raw, 0, list_header::SIZE, 0) };
+        // No resident bricks: every map entry is 0 (cleared above), every pool's list empty.
+        if let Some(b) = &self.volumes.bricks {
+            let header = b.empty_header();
+            unsafe { ctx.device.cmd_update_buffer(cmd, b.lists.raw, 0, bytemuck::cast_slice(&header)) };
+        }
     }
 }
 
@@ -62,6 +68,8 @@ impl DynamicClearPass {
             Bind::StorageImage(volumes.emission_or_albedo().view),
             Bind::Storage(&volumes.list.buffer),
             Bind::Storage(stale),
+            Bind::Uniform(&volumes.grid_buffer),
+            volumes.brick_maps_bind(),
         ];
         let set = DescriptorSet::new(ctx, "voxel clear dynamic", vk::ShaderStageFlags::COMPUTE, &binds)?;
         let pipeline = Pipeline::compute(
@@ -88,6 +96,7 @@ impl Pass for DynamicClearPass {
         uses.push(Use::buffer(&v.list.buffer, Access::IndirectCommandRead));
         uses.push(Use::buffer(&v.list.buffer, Access::ComputeShaderWrite));
         uses.extend(v.list.stale.iter().map(|s| Use::buffer(s, Access::ComputeShaderWrite)));
+        uses.extend(v.brick_map_uses(Access::ComputeShaderReadStorage));
         uses
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {

@@ -45,6 +45,7 @@ impl VoxelLightPass {
                 Bind::StorageImage(volumes.emission_or_albedo().view),
                 Bind::StorageImage(volumes.radiance.view),
                 Bind::Storage(&volumes.list.buffer),
+                volumes.brick_maps_bind(),
             ],
         )?;
         let pipeline = Pipeline::compute(

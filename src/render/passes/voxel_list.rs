@@ -85,7 +85,10 @@ pub fn dispatch_list(pipeline: &Pipeline, cmd: vk::CommandBuffer, volumes: &Voxe
 /// The uses of a pass that dispatches over the list and reads its entries.
 pub fn list_reads(volumes: &VoxelVolumes) -> Vec<Use<'_>> {
     let list = &volumes.list.buffer;
-    vec![Use::buffer(list, Access::IndirectCommandRead), Use::buffer(list, Access::ComputeShaderReadBuffer)]
+    // The list's voxels are found in the bricked volumes through the brick maps.
+    let mut uses = volumes.brick_map_uses(Access::ComputeShaderReadStorage);
+    uses.extend([Use::buffer(list, Access::IndirectCommandRead), Use::buffer(list, Access::ComputeShaderReadBuffer)]);
+    uses
 }
 
 /// Zeroes one radiance volume at the stale voxels that are still empty (glsl/voxel_stale.comp).
@@ -107,6 +110,8 @@ impl StaleZero {
                 Bind::Storage(stale),
                 Bind::StorageImage(volumes.albedo.view),
                 Bind::StorageImage(target.view),
+                Bind::Uniform(&volumes.grid_buffer),
+                volumes.brick_maps_bind(),
             ],
         )?;
         let pipeline = Pipeline::compute(ctx, "voxel stale", shaders::VOXEL_STALE_COMP, &[set.layout], 0, &[])?;

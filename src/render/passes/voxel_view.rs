@@ -11,6 +11,7 @@ use std::sync::Arc;
 
 pub struct VoxelViewPass {
     frame: FrameBuffers,
+    volumes: Arc<VoxelVolumes>,
     volume: Arc<Image>,
     voxel_radiance: Arc<Image>,
     view: View,
@@ -45,11 +46,13 @@ impl VoxelViewPass {
                 Bind::StorageImage(volume.view),
                 Bind::StorageImage(radiance.view),
                 Bind::StorageImage(volumes.final_radiance().view),
+                volumes.brick_maps_bind(),
             ],
         )?;
         let pipeline = Pipeline::compute(ctx, "voxel view", shaders::VOXEL_VIEW_COMP, &[set.layout], 0, &[(0, mode)])?;
         Ok(VoxelViewPass {
             frame: frame.clone(),
+            volumes: volumes.clone(),
             volume: volume.clone(),
             voxel_radiance: volumes.final_radiance().clone(),
             view,
@@ -78,6 +81,7 @@ impl Pass for VoxelViewPass {
             Use::overwrite(&self.radiance, Access::ComputeShaderWrite),
         ];
         uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
+        uses.extend(self.volumes.brick_map_uses(Access::ComputeShaderReadStorage));
         uses
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
@@ -110,6 +114,7 @@ impl VoxelMipViewPass {
         let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let v = volumes;
         let lod0 = v.final_radiance().clone();
+        let [pool_images, pool_sampler] = v.pool_binds();
         let set = DescriptorSet::new(
             ctx,
             "voxel mip view",
@@ -121,6 +126,9 @@ impl VoxelMipViewPass {
                 Bind::Sampled(lod0.view, v.sampler.raw, ro),
                 Bind::SampledArray(v.directional.iter().map(|d| d.view).collect(), v.sampler.raw, ro),
                 Bind::StorageImage(radiance.view),
+                v.brick_maps_bind(),
+                pool_images,
+                pool_sampler,
             ],
         )?;
         let dir = match direction {
@@ -156,6 +164,8 @@ impl Pass for VoxelMipViewPass {
             Use::overwrite(&self.radiance, Access::ComputeShaderWrite),
         ];
         uses.extend(self.volumes.directional.iter().map(|d| Use::image(d, Access::ComputeShaderReadSampled)));
+        uses.extend(self.volumes.pool_uses());
+        uses.extend(self.volumes.brick_map_uses(Access::ComputeShaderReadStorage));
         uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
         uses
     }

@@ -1,0 +1,80 @@
+// The bricked layout of the voxel volumes (render::bricks, docs/SPARSE.md). A volume stores
+// only resident bricks of 8^3 texels, side by side in a pool image; a map per pool (R32_UINT,
+// one texel per brick of the grid) holds 0 for a brick that is not resident, else its pool
+// slot + 1. Pool 0 holds the full-resolution volumes (8^3 per brick); pools 1.. hold the
+// directional levels larger than 64^3, each brick with a one-texel apron on its low side
+// (9^3: texels 8b-1 .. 8b+7 of brick b per axis) so hardware trilinear filtering stays inside
+// one brick. With grid.dims.z == 0 the volumes are dense and these helpers are the identity.
+//
+// The including shader declares, before including this file:
+//   uniform GridBlock { VoxelGrid grid; };
+//   layout(r32ui) uniform [readonly] uimage3D brick_maps[4];
+#ifndef DVSGI_BRICKS_GLSL
+#define DVSGI_BRICKS_GLSL
+#include "voxel.glsl"
+
+// A map entry the mark pass set and the allocation has not yet replaced by a slot.
+const uint BRICK_PENDING = 0xffffffffu;
+
+bool bricked() {
+    return grid.dims.z != 0u;
+}
+
+// Texels per side of pool p's level: the grid for pool 0, directional level p - 1 after.
+int pool_level_side(int p) {
+    int n = int(grid.dims.x);
+    return p == 0 ? n : (n / 2) >> (p - 1);
+}
+
+// The raw map entry of brick b of pool p (0 outside the map). Literal image indices only.
+uint brick_map_load(int p, ivec3 b) {
+    if (any(lessThan(b, ivec3(0))) || any(greaterThanEqual(b, ivec3(int(grid.pools[p].w))))) return 0u;
+    switch (p) {
+        case 0: return imageLoad(brick_maps[0], b).r;
+        case 1: return imageLoad(brick_maps[1], b).r;
+        case 2: return imageLoad(brick_maps[2], b).r;
+        default: return imageLoad(brick_maps[3], b).r;
+    }
+}
+
+// Pool slot + 1 of brick b of pool p; 0 when it is not resident.
+uint brick_slot(int p, ivec3 b) {
+    uint s = brick_map_load(p, b);
+    return s == BRICK_PENDING ? 0u : s;
+}
+
+// Texel origin of slot s (0-based) in pool p's image.
+ivec3 slot_texel(int p, uint s, int stride) {
+    uvec4 q = grid.pools[p];
+    return ivec3(s % q.x, (s / q.x) % q.y, s / (q.x * q.y)) * stride;
+}
+
+// The pool texel of full-resolution voxel c; (-1) where c is outside the grid or its brick is
+// not resident (it reads as empty).
+ivec3 full_texel(ivec3 c) {
+    if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(int(grid.dims.x))))) return ivec3(-1);
+    if (!bricked()) return c;
+    uint s = brick_slot(0, c >> 3);
+    return s == 0u ? ivec3(-1) : slot_texel(0, s - 1u, 8) + (c & 7);
+}
+
+// The pool texel of texel t of pooled directional level p - 1 (its own brick's interior);
+// (-1) outside the level or where the brick is not resident.
+ivec3 level_texel(int p, ivec3 t) {
+    if (any(lessThan(t, ivec3(0))) || any(greaterThanEqual(t, ivec3(pool_level_side(p))))) return ivec3(-1);
+    uint s = brick_slot(p, t >> 3);
+    return s == 0u ? ivec3(-1) : slot_texel(p, s - 1u, 9) + (t & 7) + 1;
+}
+
+// Pool coordinates (texels, continuous) of position `p` (texels of pooled level p - 1) for a
+// trilinear lookup: the brick whose 9^3 texels hold both texels of the filter on each axis.
+// w = 0 where that brick is not resident (all eight texels are empty).
+vec4 level_lookup(int pool, vec3 pos) {
+    ivec3 t0 = ivec3(floor(pos - 0.5));
+    ivec3 b = (t0 + 1) >> 3;
+    uint s = brick_slot(pool, b);
+    if (s == 0u) return vec4(0.0);
+    return vec4(vec3(slot_texel(pool, s - 1u, 9)) + pos - vec3(b * 8) + 1.0, 1.0);
+}
+
+#endif

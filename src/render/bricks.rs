@@ -1,0 +1,467 @@
+//! The bricked (sparse) layout of the voxel volumes: each volume stores only the bricks of
+//! 8^3 texels that hold something, in a pool (a 3D image of bricks side by side), found
+//! through a map of the grid's bricks (R32_UINT: 0 = not resident, else pool slot + 1).
+//! docs/SPARSE.md says why this layout and not sparse residency, with the measurements.
+//!
+//! Pool 0 holds the full-resolution volumes (albedo, normal, emission, flags, radiance,
+//! bounces): integer lookups only, so a brick is resident when one of its voxels is occupied.
+//! Pools 1.. hold the directional volumes' levels that are larger than [`DENSE_SIDE`]^3:
+//! they are sampled with hardware trilinear filtering, so each brick keeps a one-texel apron
+//! on its low side (9^3 texels: the texels 8b-1 .. 8b+7 of brick b on each axis) and a
+//! brick is resident when any of its 9^3 texels is non-empty. Coarser levels stay dense.
+//!
+//! The GPU marks bricks while voxelizing and allocates pool slots in a compute pass; the pools
+//! are sized up front by [`BrickLayout::for_scene`], an upper bound from the triangles (a
+//! separating-axis test of each triangle against the bricks its box touches), so no
+//! allocation can overflow and the memory estimate is what is allocated.
+
+use crate::gpu::{Buffer, Context, GpuResult, Image, ImageDesc};
+use crate::render::voxel::{VoxelGrid, RADIANCE_VOLUME_FORMAT};
+use crate::scene::Scene;
+use ash::vk;
+use glam::Vec3;
+use std::sync::Arc;
+
+/// Texels along each side of a brick.
+pub const BRICK: u32 = 8;
+/// Directional levels of at most this many texels per side are dense.
+pub const DENSE_SIDE: u32 = 64;
+/// Pools: full resolution and up to three directional levels (grids up to 1024^3).
+pub const MAX_POOLS: usize = 4;
+
+/// One pool: the bricks of one level of the grid.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Pool {
+    /// Texels per side of the level (N for pool 0, N/2 >> L for directional level L).
+    pub level_side: u32,
+    /// Bricks per side of the map: level_side / 8, plus one with the apron (the bricks past
+    /// the last texel hold it in their apron).
+    pub map_side: u32,
+    /// Texels per side of a stored brick: 8, or 9 with the apron.
+    pub stride: u32,
+    /// Slots the pool holds: an upper bound of the resident bricks.
+    pub capacity: u32,
+    /// Slots per axis of the pool image (x * y * z >= capacity).
+    pub slots: [u32; 3],
+}
+
+impl Pool {
+    fn new(level_side: u32, apron: bool, capacity: u64) -> Pool {
+        let map_side = level_side / BRICK + u32::from(apron);
+        let capacity = capacity.min(u64::from(map_side).pow(3)).max(1) as u32;
+        // As cubic as the count allows: x = y = ceil(cbrt), z what remains.
+        let x = (f64::from(capacity).cbrt().ceil() as u32).max(1);
+        let z = capacity.div_ceil(x * x);
+        Pool { level_side, map_side, stride: BRICK + u32::from(apron), capacity, slots: [x, x, z] }
+    }
+
+    /// Texels per axis of the pool image.
+    pub fn extent(&self) -> [u32; 3] {
+        self.slots.map(|s| s * self.stride)
+    }
+
+    /// Texels of the pool image (one volume).
+    pub fn texels(&self) -> u64 {
+        self.extent().iter().map(|&e| u64::from(e)).product()
+    }
+
+    /// Bricks of the grid at this level (the map's entries).
+    pub fn map_entries(&self) -> u64 {
+        u64::from(self.map_side).pow(3)
+    }
+}
+
+/// The pools of a grid: full resolution first, then the pooled directional levels.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct BrickLayout {
+    pub pools: Vec<Pool>,
+}
+
+impl BrickLayout {
+    /// Directional levels with more than [`DENSE_SIDE`] texels per side (at most 3).
+    pub fn pooled_levels(resolution: u32) -> u32 {
+        (0..3).take_while(|&l| (resolution / 2) >> l > DENSE_SIDE).count() as u32
+    }
+
+    /// The pools for `scene` on `grid`, sized by [`capacity`] (`cones`: the directional
+    /// volumes exist).
+    pub fn for_scene(scene: &Scene, grid: &VoxelGrid, cones: bool) -> BrickLayout {
+        let n = grid.resolution;
+        let levels = if cones { Self::pooled_levels(n) } else { 0 };
+        let caps = capacity(scene, grid, levels);
+        let mut pools = vec![Pool::new(n, false, caps[0])];
+        for l in 0..levels {
+            pools.push(Pool::new((n / 2) >> l, true, caps[l as usize + 1]));
+        }
+        BrickLayout { pools }
+    }
+
+    /// Bytes of the pooled volumes and maps: `full_bytes` per full-resolution texel (all
+    /// its volumes together), 6 RGBA16F directional volumes per directional pool.
+    pub fn bytes(&self, full_bytes: u64) -> u64 {
+        let maps: u64 = self.pools.iter().map(|p| 4 * p.map_entries()).sum();
+        let full = self.pools[0].texels() * full_bytes;
+        let directional: u64 = self.pools[1..].iter().map(|p| 6 * 8 * p.texels()).sum();
+        maps + full + directional
+    }
+}
+
+/// Upper bounds of the resident bricks of each pool: pool 0 (full resolution), then
+/// directional levels 0..levels. A static triangle counts the bricks it touches (the
+/// separating-axis test against each brick box of its bounding box, grown by 1/64 voxel so
+/// that the voxelizer's conservative coverage is inside); a moving one (keyframes), the bricks
+/// of a cube as wide as its enclosing sphere, grown by its largest keyframe scale, wherever
+/// it goes ([`crate::render::voxel::list_capacity`]'s rule). A directional texel is needed by
+/// the brick holding it and by the brick whose apron holds it.
+pub fn capacity(scene: &Scene, grid: &VoxelGrid, levels: u32) -> Vec<u64> {
+    let n = grid.resolution;
+    let side0 = n / BRICK;
+    let mut full = vec![false; (side0 as usize).pow(3)];
+    let mut moving = vec![0u64; levels as usize + 1];
+    let vs = grid.voxel_size.max(f32::MIN_POSITIVE);
+    for o in &scene.objects {
+        let moves = !o.motion.is_static();
+        let m = o.model_matrix(scene.settings.time);
+        let scale = crate::render::voxel::object_max_scale(o);
+        for mesh in o.meshes.iter().filter_map(|&i| scene.meshes.get(i as usize)) {
+            for t in mesh.indices.chunks_exact(3) {
+                let p = [t[0], t[1], t[2]].map(|i| mesh.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO));
+                if moves {
+                    let edge = (p[0] - p[1]).length().max((p[1] - p[2]).length()).max((p[2] - p[0]).length());
+                    let side = edge * scale * 2.0 / 3f32.sqrt() / vs; // voxels
+                    for (l, count) in moving.iter_mut().enumerate() {
+                        // Texels of this pool's level per voxel, and its bricks per axis.
+                        let texel = if l == 0 { 1.0 } else { (1u32 << l) as f32 };
+                        let bricks = ((side / texel + 2.0) / BRICK as f32).ceil() as u64 + 1;
+                        *count += bricks.pow(3);
+                    }
+                } else {
+                    let w = p.map(|q| (m.transform_point3(q) - grid.origin) / vs);
+                    mark_triangle_bricks(&mut full, side0, w);
+                }
+            }
+        }
+    }
+    let mut caps = vec![full.iter().filter(|&&b| b).count() as u64 + moving[0]];
+    for l in 0..levels {
+        caps.push(directional_bricks(&full, side0, n, l) + moving[l as usize + 1]);
+    }
+    caps
+}
+
+/// Mark the bricks (of `side`^3) that triangle `w` (voxel units) touches.
+fn mark_triangle_bricks(bricks: &mut [bool], side: u32, w: [Vec3; 3]) {
+    let b = BRICK as f32;
+    let lo = (w[0].min(w[1]).min(w[2]) / b).floor().max(Vec3::ZERO);
+    let hi = (w[0].max(w[1]).max(w[2]) / b).floor().min(Vec3::splat(side as f32 - 1.0));
+    if lo.cmpgt(hi).any() {
+        return;
+    }
+    let grow = 1.0 / 64.0;
+    for z in lo.z as u32..=hi.z as u32 {
+        for y in lo.y as u32..=hi.y as u32 {
+            for x in lo.x as u32..=hi.x as u32 {
+                let i = (x + side * (y + side * z)) as usize;
+                if bricks[i] {
+                    continue;
+                }
+                let centre = (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * b;
+                if triangle_box_overlap(centre, Vec3::splat(b * 0.5 + grow), w) {
+                    bricks[i] = true;
+                }
+            }
+        }
+    }
+}
+
+/// Bricks of directional level `l` that a full-resolution brick set can make non-empty: the
+/// texels under each full-resolution brick, each in its own brick and in the apron of the
+/// next brick up on each axis.
+fn directional_bricks(full: &[bool], side0: u32, n: u32, l: u32) -> u64 {
+    let level_side = (n / 2) >> l;
+    let map_side = level_side / BRICK + 1;
+    let mut set = vec![false; (map_side as usize).pow(3)];
+    let shift = l + 1; // full-resolution voxels per texel: 2^shift
+    for (i, _) in full.iter().enumerate().filter(|(_, &b)| b) {
+        let i = i as u32;
+        let b = [i % side0, (i / side0) % side0, i / (side0 * side0)];
+        // Texels lo..=hi under the brick, then the bricks of lo..=hi+1.
+        let range = b.map(|c| ((c * BRICK) >> shift, (((c * BRICK + BRICK - 1) >> shift) + 1) / BRICK));
+        let first = range.map(|(lo, _)| lo / BRICK);
+        for z in first[2]..=range[2].1.min(map_side - 1) {
+            for y in first[1]..=range[1].1.min(map_side - 1) {
+                for x in first[0]..=range[0].1.min(map_side - 1) {
+                    set[(x + map_side * (y + map_side * z)) as usize] = true;
+                }
+            }
+        }
+    }
+    set.iter().filter(|&&b| b).count() as u64
+}
+
+/// Separating-axis test of a triangle against the box at `c` with half size `h` (touching
+/// counts), as glsl/include/voxel.glsl's.
+pub fn triangle_box_overlap(c: Vec3, h: Vec3, t: [Vec3; 3]) -> bool {
+    let v = t.map(|p| p - c);
+    let e = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
+    let separates = |axis: Vec3| {
+        let len2 = axis.length_squared();
+        if len2 < 1e-20 {
+            return false;
+        }
+        let p = v.map(|q| axis.dot(q));
+        let r = h.dot(axis.abs());
+        let eps = 1e-5 * (r + 1e-3 * len2.sqrt());
+        p[0].min(p[1]).min(p[2]) > r + eps || p[0].max(p[1]).max(p[2]) < -r - eps
+    };
+    let axes = [Vec3::X, Vec3::Y, Vec3::Z];
+    if axes.iter().any(|&a| separates(a)) || separates(e[0].cross(e[1])) {
+        return false;
+    }
+    !e.iter().any(|ei| axes.iter().any(|&a| separates(ei.cross(a))))
+}
+
+/// Byte offsets of the brick lists' header (`BrickListBlock` in glsl/include/brick_list.glsl).
+pub mod list_header {
+    /// Per pool: a `VkDispatchIndirectCommand` over its resident bricks and their count.
+    pub fn range(pool: usize) -> u64 {
+        16 * pool as u64
+    }
+    /// Header size; the entries follow.
+    pub const SIZE: u64 = 128;
+}
+
+/// The GPU side of a bricked layout: one map per pool, the pooled directional levels and the
+/// lists of resident bricks.
+pub struct Bricks {
+    pub layout: BrickLayout,
+    /// One R32_UINT map per pool.
+    pub maps: Vec<Arc<Image>>,
+    /// Pools 1..: the six directional volumes of each pooled level (RGBA16F, 9^3 per brick).
+    pub directional: Vec<Vec<Arc<Image>>>,
+    /// The resident bricks of every pool, after a header of indirect dispatches.
+    pub lists: Arc<Buffer>,
+}
+
+impl Bricks {
+    pub fn new(ctx: &Arc<Context>, layout: BrickLayout) -> GpuResult<Bricks> {
+        let storage =
+            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC;
+        let maps = layout
+            .pools
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                Image::new(
+                    ctx,
+                    &format!("voxel brick map {i}"),
+                    ImageDesc::d3(vk::Format::R32_UINT, p.map_side, 1, storage),
+                )
+                .map(Arc::new)
+            })
+            .collect::<GpuResult<Vec<_>>>()?;
+        let directional = layout.pools[1..]
+            .iter()
+            .enumerate()
+            .map(|(l, p)| {
+                ["+x", "-x", "+y", "-y", "+z", "-z"]
+                    .iter()
+                    .map(|d| {
+                        let desc = ImageDesc::d3_extent(
+                            RADIANCE_VOLUME_FORMAT,
+                            p.extent(),
+                            storage | vk::ImageUsageFlags::SAMPLED,
+                        );
+                        Image::new(ctx, &format!("voxel radiance {d} level {l} bricks"), desc).map(Arc::new)
+                    })
+                    .collect::<GpuResult<Vec<_>>>()
+            })
+            .collect::<GpuResult<Vec<_>>>()?;
+        let entries: u64 = layout.pools.iter().map(|p| u64::from(p.capacity)).sum();
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::INDIRECT_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
+        let lists = Arc::new(Buffer::new(
+            ctx,
+            "voxel brick lists",
+            list_header::SIZE + 4 * entries,
+            usage,
+            gpu_allocator::MemoryLocation::GpuOnly,
+        )?);
+        Ok(Bricks { layout, maps, directional, lists })
+    }
+
+    /// The lists' header with nothing resident: where each pool's entries start and how many
+    /// it may hold (`BrickListBlock`).
+    pub fn empty_header(&self) -> [u32; 32] {
+        let mut h = [0u32; 32];
+        let mut first = 0;
+        for (i, p) in self.layout.pools.iter().enumerate() {
+            h[16 + i] = first;
+            h[20 + i] = p.capacity;
+            first += p.capacity;
+        }
+        h
+    }
+
+    /// The maps and the pooled directional images.
+    pub fn images(&self) -> impl Iterator<Item = &Arc<Image>> {
+        self.maps.iter().chain(self.directional.iter().flatten())
+    }
+}
+
+/// The resident bricks as read back after a frame (`Renderer::resident_bricks`): for tests,
+/// `info` and the benchmark.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct BrickSnapshot {
+    pub pools: Vec<PoolSnapshot>,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PoolSnapshot {
+    pub pool: Pool,
+    /// Brick coordinates in allocation order.
+    pub resident: Vec<[u32; 3]>,
+    /// Bricks that found no slot: always 0, since the capacity bounds what can be marked.
+    pub dropped: u32,
+}
+
+impl BrickSnapshot {
+    /// Decode the lists buffer (`BrickListBlock`).
+    pub fn decode(layout: &BrickLayout, bytes: &[u8]) -> BrickSnapshot {
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(bytes);
+        let pools = layout
+            .pools
+            .iter()
+            .enumerate()
+            .map(|(i, &pool)| {
+                let count = words[4 * i + 3].min(pool.capacity) as usize;
+                let first = (list_header::SIZE / 4) as usize + words[16 + i] as usize;
+                let unpack = |w: &u32| [w & 0x3ff, (w >> 10) & 0x3ff, w >> 20];
+                let resident = words[first..first + count].iter().map(unpack).collect();
+                PoolSnapshot { pool, resident, dropped: words[24 + i] }
+            })
+            .collect();
+        BrickSnapshot { pools }
+    }
+
+    /// One line per pool: resident bricks of the capacity and of the map, and the pool's size.
+    pub fn summary(&self, full_bytes_per_texel: u64) -> Vec<String> {
+        let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+        self.pools
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let what = if i == 0 { "full resolution".to_string() } else { format!("directional level {}", i - 1) };
+                let bytes = p.pool.texels() * if i == 0 { full_bytes_per_texel } else { 6 * 8 };
+                format!(
+                    "bricks, {what} ({}³ texels, {}³ per brick): {} resident of {} slots, {} bricks in the grid ({:.2}%); pool {:.2} MiB",
+                    p.pool.level_side,
+                    p.pool.stride,
+                    p.resident.len(),
+                    p.pool.capacity,
+                    p.pool.map_entries(),
+                    100.0 * p.resident.len() as f64 / p.pool.map_entries() as f64,
+                    mib(bytes),
+                )
+            })
+            .collect()
+    }
+}
+
+/// The dense texels (`texel` bytes each, x fastest) of a pool's level, from the pool image's
+/// bytes and its map: each resident brick's interior copied out, the rest zero.
+pub fn unpool(pool: &Pool, pooled: &[u8], map: &[u32], texel: usize) -> Vec<u8> {
+    let side = pool.level_side as usize;
+    let ext = pool.extent().map(|e| e as usize);
+    let apron = (pool.stride - BRICK) as usize;
+    let mut out = vec![0u8; side * side * side * texel];
+    let m = pool.map_side as usize;
+    for (i, &entry) in map.iter().enumerate().filter(|(_, &e)| e != 0 && e != u32::MAX) {
+        let b = [i % m, (i / m) % m, i / (m * m)];
+        let s = (entry - 1) as usize;
+        let slot = [
+            s % pool.slots[0] as usize,
+            (s / pool.slots[0] as usize) % pool.slots[1] as usize,
+            s / (pool.slots[0] * pool.slots[1]) as usize,
+        ];
+        for z in 0..BRICK as usize {
+            for y in 0..BRICK as usize {
+                for x in 0..BRICK as usize {
+                    let t = [b[0] * 8 + x, b[1] * 8 + y, b[2] * 8 + z];
+                    if t.iter().any(|&c| c >= side) {
+                        continue;
+                    }
+                    let p = [x, y, z].map(|c| c + apron);
+                    let src =
+                        ((slot[2] * pool.stride as usize + p[2]) * ext[1] + slot[1] * pool.stride as usize + p[1])
+                            * ext[0]
+                            + slot[0] * pool.stride as usize
+                            + p[0];
+                    let dst = (t[2] * side + t[1]) * side + t[0];
+                    out[dst * texel..(dst + 1) * texel].copy_from_slice(&pooled[src * texel..(src + 1) * texel]);
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pools_hold_their_capacity_in_near_cubic_images() {
+        let p = Pool::new(256, false, 5418);
+        assert_eq!((p.map_side, p.stride, p.capacity), (32, 8, 5418));
+        assert!(p.slots.iter().product::<u32>() >= 5418 && p.slots[0] == 18);
+        let d = Pool::new(128, true, 10_000); // more than the map's 17^3 = 4913 bricks
+        assert_eq!((d.map_side, d.stride, d.capacity), (17, 9, 4913));
+        assert_eq!(d.extent()[0], d.slots[0] * 9);
+    }
+
+    #[test]
+    fn grids_pool_the_directional_levels_above_64_texels() {
+        assert_eq!(BrickLayout::pooled_levels(64), 0);
+        assert_eq!(BrickLayout::pooled_levels(128), 0);
+        assert_eq!(BrickLayout::pooled_levels(256), 1);
+        assert_eq!(BrickLayout::pooled_levels(512), 2);
+        assert_eq!(BrickLayout::pooled_levels(1024), 3);
+    }
+
+    #[test]
+    fn a_full_resolution_brick_needs_the_directional_bricks_of_its_texels_and_aprons() {
+        // Grid 256: level 0 has 128 texels per side, map 17. Full-res brick (1, 0, 0) covers
+        // voxels 8..15 -> texels 4..7 -> bricks 0 and (7 + 1) / 8 = 1 along x; along y and z
+        // brick 0 covers texels 0..3 -> brick 0 only.
+        let side0 = 32;
+        let mut full = vec![false; 32 * 32 * 32];
+        full[1] = true;
+        assert_eq!(directional_bricks(&full, side0, 256, 0), 2);
+        // Brick (0, 0, 0): texels 0..3, brick 0 only.
+        let mut full = vec![false; 32 * 32 * 32];
+        full[0] = true;
+        assert_eq!(directional_bricks(&full, side0, 256, 0), 1);
+    }
+
+    #[test]
+    fn a_triangle_marks_the_bricks_it_crosses() {
+        let side = 4; // a 32^3 grid
+        let mut bricks = vec![false; 64];
+        // A horizontal triangle at y = 4 (inside brick row 0) over x, z in [1, 20].
+        let v = Vec3::new;
+        mark_triangle_bricks(&mut bricks, side, [v(1.0, 4.0, 1.0), v(20.0, 4.0, 1.0), v(1.0, 4.0, 20.0)]);
+        let marked: Vec<usize> = (0..64).filter(|&i| bricks[i]).collect();
+        // x, z bricks 0..2 below the diagonal x + z <= 21: (0,0) (1,0) (2,0) (0,1) (1,1) (0,2)
+        // (brick (2,1) starts at x = 16, z = 8: 24 > 21; (1,2): x = 8, z = 16: 24 > 21).
+        let expect: Vec<usize> = [(0, 0), (1, 0), (2, 0), (0, 1), (1, 1), (0, 2)]
+            .iter()
+            .map(|&(x, z)| x + side as usize * side as usize * z)
+            .collect();
+        let mut expect = expect;
+        expect.sort();
+        assert_eq!(marked, expect);
+    }
+}
