@@ -215,6 +215,7 @@ mod tests {
         scene.settings.height = 10;
         scene.settings.gi.voxel_resolution = 8;
         scene.settings.gi.bounces = 1;
+        scene.settings.gi.voxel_layout = VoxelLayout::Dense;
         let e = Estimate::of(&scene);
         // albedo + normal 2 x 2048, radiance 4096, bounced radiance and the bounce's scratch
         // volume 2 x 4096, six directional chains of (64 + 8 + 1) texels x 8 bytes, and the
@@ -230,6 +231,12 @@ mod tests {
         scene.settings.gi.voxel_resolution = 512;
         let v = Estimate::of(&scene).volumes as f64 / (1u64 << 30) as f64;
         assert!((v - 4.857).abs() < 0.01, "{v} GiB");
+        // Bricked, an empty scene holds one slot per pool (the pools' minimum), the maps
+        // (64^3 + 33^3 + 17^3 entries at 512^3), the lists and the dense directional levels
+        // of at most 64^3: a few MiB.
+        scene.settings.gi.voxel_layout = VoxelLayout::Bricks;
+        let bricked = Estimate::of(&scene).volumes;
+        assert!(bricked > 4 * 64u64.pow(3) && bricked < 16 << 20, "{bricked} bytes");
     }
 
     #[test]
@@ -238,6 +245,7 @@ mod tests {
         scene.settings.width = 64;
         scene.settings.height = 64;
         scene.settings.gi.voxel_resolution = 512;
+        scene.settings.gi.voxel_layout = VoxelLayout::Dense;
         let lim = |heap, max_allocation| Limits { device: "llvmpipe", heap, max_allocation };
         let e = Estimate::of(&scene);
         let err = e.check_limits(&scene, &lim(2 << 30, 2 << 30)).unwrap_err().to_string();
