@@ -14,18 +14,10 @@ layout(constant_id = 1) const bool FINALIZE = false;
 
 layout(set = 0, binding = 0) uniform GridBlock { VoxelGrid grid; };
 layout(set = 0, binding = 1, r32ui) uniform uimage3D brick_maps[4];
+#define BRICK_MAPS_WRITABLE
 #include "bricks.glsl"
 #define BRICK_LIST_BINDING 2
 #include "brick_list.glsl"
-
-void store_slot(ivec3 b, uint v) {
-    switch (POOL) {
-        case 0: imageStore(brick_maps[0], b, uvec4(v)); break;
-        case 1: imageStore(brick_maps[1], b, uvec4(v)); break;
-        case 2: imageStore(brick_maps[2], b, uvec4(v)); break;
-        default: imageStore(brick_maps[3], b, uvec4(v)); break;
-    }
-}
 
 void main() {
     if (FINALIZE) {
@@ -45,9 +37,9 @@ void main() {
     uint s = atomicAdd(blist.ranges[POOL].count, 1u);
     if (s < blist.capacity[POOL]) {
         blist.entries[blist.first[POOL] + s] = pack_brick(b);
-        store_slot(b, s + 1u);
+        brick_map_store(POOL, b, s + 1u);
     } else {
         atomicAdd(blist.dropped[POOL], 1u);
-        store_slot(b, 0u);
+        brick_map_store(POOL, b, 0u);
     }
 }

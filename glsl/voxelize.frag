@@ -31,6 +31,7 @@ layout(set = 0, binding = 6, r32ui) uniform coherent uimage3D vox_normal;
 layout(set = 0, binding = 7, r32ui) uniform coherent uimage3D vox_emission;
 layout(set = 0, binding = 8, r8ui) uniform uimage3D vox_flags;
 layout(set = 0, binding = 11, r32ui) uniform uimage3D brick_maps[4];
+#define BRICK_MAPS_WRITABLE
 #include "bricks.glsl"
 
 layout(push_constant) uniform Push { uint mark_static; } pc;
@@ -47,25 +48,16 @@ DEFINE_ATOMIC_AVERAGE(average_albedo, vox_albedo)
 DEFINE_ATOMIC_AVERAGE(average_normal, vox_normal)
 DEFINE_ATOMIC_AVERAGE(average_emission, vox_emission)
 
-void mark_brick(int p, ivec3 b) {
-    switch (p) {
-        case 0: imageAtomicCompSwap(brick_maps[0], b, 0u, BRICK_PENDING); break;
-        case 1: imageAtomicCompSwap(brick_maps[1], b, 0u, BRICK_PENDING); break;
-        case 2: imageAtomicCompSwap(brick_maps[2], b, 0u, BRICK_PENDING); break;
-        default: imageAtomicCompSwap(brick_maps[3], b, 0u, BRICK_PENDING); break;
-    }
-}
-
 // The bricks voxel vc needs: its own full-resolution brick, and on each pooled directional
 // level the brick of the texel over it and the brick whose apron holds that texel.
 void mark_bricks(ivec3 vc) {
-    mark_brick(0, vc >> 3);
+    brick_mark(0, vc >> 3);
     for (int l = 0; l < int(grid.dims.y); ++l) {
         ivec3 t = vc >> (l + 1);
         ivec3 lo = t >> 3, hi = (t + 1) >> 3;
         for (int z = lo.z; z <= hi.z; ++z) {
             for (int y = lo.y; y <= hi.y; ++y) {
-                for (int x = lo.x; x <= hi.x; ++x) mark_brick(l + 1, ivec3(x, y, z));
+                for (int x = lo.x; x <= hi.x; ++x) brick_mark(l + 1, ivec3(x, y, z));
             }
         }
     }

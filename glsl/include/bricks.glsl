@@ -9,6 +9,8 @@
 // The including shader declares, before including this file:
 //   uniform GridBlock { VoxelGrid grid; };
 //   layout(r32ui) uniform [readonly] uimage3D brick_maps[4];
+// and defines BRICK_MAPS_WRITABLE where the maps are not readonly (the marking run and the
+// allocation), for brick_mark and brick_map_store.
 #ifndef DVSGI_BRICKS_GLSL
 #define DVSGI_BRICKS_GLSL
 #include "voxel.glsl"
@@ -36,6 +38,27 @@ uint brick_map_load(int p, ivec3 b) {
         default: return imageLoad(brick_maps[3], b).r;
     }
 }
+
+#ifdef BRICK_MAPS_WRITABLE
+// Mark brick b of pool p pending unless it is resident or marked already.
+void brick_mark(int p, ivec3 b) {
+    switch (p) {
+        case 0: imageAtomicCompSwap(brick_maps[0], b, 0u, BRICK_PENDING); break;
+        case 1: imageAtomicCompSwap(brick_maps[1], b, 0u, BRICK_PENDING); break;
+        case 2: imageAtomicCompSwap(brick_maps[2], b, 0u, BRICK_PENDING); break;
+        default: imageAtomicCompSwap(brick_maps[3], b, 0u, BRICK_PENDING); break;
+    }
+}
+
+void brick_map_store(int p, ivec3 b, uint v) {
+    switch (p) {
+        case 0: imageStore(brick_maps[0], b, uvec4(v)); break;
+        case 1: imageStore(brick_maps[1], b, uvec4(v)); break;
+        case 2: imageStore(brick_maps[2], b, uvec4(v)); break;
+        default: imageStore(brick_maps[3], b, uvec4(v)); break;
+    }
+}
+#endif
 
 // Pool slot + 1 of brick b of pool p; 0 when it is not resident.
 uint brick_slot(int p, ivec3 b) {

@@ -718,7 +718,10 @@ fn occupancy(renderer: &mut Renderer, time: f32) -> dvsgi::Result<()> {
     outln!("  occupied voxels (first frame): {}", o.summary());
     let v = renderer.voxels().expect("voxels");
     let bytes: u64 = v.all().iter().map(|i| i.bytes).sum();
-    let per_texel: u64 = v.full_resolution().iter().map(|i| i.bytes / i.desc.texel_count().max(1)).sum();
+    let full: u64 = v.full_resolution().iter().map(|i| i.bytes).sum();
+    let pool_bytes: Vec<u64> = std::iter::once(full)
+        .chain(v.bricks.iter().flat_map(|b| b.directional.iter().map(|l| l.iter().map(|i| i.bytes).sum())))
+        .collect();
     let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
     let mut dense_scene = renderer.scene.clone();
     dense_scene.settings.gi.voxel_layout = dvsgi::scene::VoxelLayout::Dense;
@@ -733,7 +736,7 @@ fn occupancy(renderer: &mut Renderer, time: f32) -> dvsgi::Result<()> {
         bytes as f64 / dense.max(1) as f64,
         mib(dense)
     );
-    for line in snapshot.summary(per_texel) {
+    for line in snapshot.summary(&pool_bytes) {
         outln!("  {line}");
     }
     Ok(())

@@ -127,8 +127,7 @@ pub fn capacity(scene: &Scene, grid: &VoxelGrid, levels: u32) -> Vec<u64> {
             for t in mesh.indices.chunks_exact(3) {
                 let p = [t[0], t[1], t[2]].map(|i| mesh.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO));
                 if moves {
-                    let edge = (p[0] - p[1]).length().max((p[1] - p[2]).length()).max((p[2] - p[0]).length());
-                    let side = edge * scale * 2.0 / 3f32.sqrt() / vs; // voxels
+                    let side = crate::render::voxel::swept_cube_side(p, scale) / vs; // voxels
                     for (l, count) in moving.iter_mut().enumerate() {
                         // Texels of this pool's level per voxel, and its bricks per axis.
                         let texel = if l == 0 { 1.0 } else { (1u32 << l) as f32 };
@@ -227,6 +226,10 @@ pub mod list_header {
     pub fn range(pool: usize) -> u64 {
         16 * pool as u64
     }
+    /// Word indices of the per-pool arrays after the ranges: first entry, capacity, dropped.
+    pub const FIRST: usize = 16;
+    pub const CAPACITY: usize = 20;
+    pub const DROPPED: usize = 24;
     /// Header size; the entries follow.
     pub const SIZE: u64 = 128;
 }
@@ -298,8 +301,8 @@ impl Bricks {
         let mut h = [0u32; 32];
         let mut first = 0;
         for (i, p) in self.layout.pools.iter().enumerate() {
-            h[16 + i] = first;
-            h[20 + i] = p.capacity;
+            h[list_header::FIRST + i] = first;
+            h[list_header::CAPACITY + i] = p.capacity;
             first += p.capacity;
         }
         h
@@ -337,24 +340,25 @@ impl BrickSnapshot {
             .enumerate()
             .map(|(i, &pool)| {
                 let count = words[4 * i + 3].min(pool.capacity) as usize;
-                let first = (list_header::SIZE / 4) as usize + words[16 + i] as usize;
+                let first = (list_header::SIZE / 4) as usize + words[list_header::FIRST + i] as usize;
                 let unpack = |w: &u32| [w & 0x3ff, (w >> 10) & 0x3ff, w >> 20];
                 let resident = words[first..first + count].iter().map(unpack).collect();
-                PoolSnapshot { pool, resident, dropped: words[24 + i] }
+                PoolSnapshot { pool, resident, dropped: words[list_header::DROPPED + i] }
             })
             .collect();
         BrickSnapshot { pools }
     }
 
-    /// One line per pool: resident bricks of the capacity and of the map, and the pool's size.
-    pub fn summary(&self, full_bytes_per_texel: u64) -> Vec<String> {
+    /// One line per pool: resident bricks of the capacity and of the map, and the bytes of the
+    /// pool's images (`pool_bytes`, one figure per pool).
+    pub fn summary(&self, pool_bytes: &[u64]) -> Vec<String> {
         let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
         self.pools
             .iter()
             .enumerate()
-            .map(|(i, p)| {
+            .zip(pool_bytes)
+            .map(|((i, p), &bytes)| {
                 let what = if i == 0 { "full resolution".to_string() } else { format!("directional level {}", i - 1) };
-                let bytes = p.pool.texels() * if i == 0 { full_bytes_per_texel } else { 6 * 8 };
                 format!(
                     "bricks, {what} ({}³ texels, {}³ per brick): {} resident of {} slots, {} bricks in the grid ({:.2}%); pool {:.2} MiB",
                     p.pool.level_side,

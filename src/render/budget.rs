@@ -4,7 +4,7 @@
 //! `memory_estimate_matches_what_is_allocated` keeps it within 10% of what is really allocated.
 
 use crate::gpu::{Context, GpuError, GpuResult};
-use crate::render::bricks::BrickLayout;
+use crate::render::bricks::{self, BrickLayout};
 use crate::render::frame::cone_shadows;
 use crate::render::voxel::{list_capacity, VoxelGrid, VoxelNeeds};
 use crate::scene::{GiMode, Scene, View, VoxelLayout};
@@ -67,53 +67,13 @@ impl Estimate {
             }
         }
         if s.gi.mode == GiMode::Vct || voxel_view {
-            let needs = VoxelNeeds::of(scene);
-            let res = s.gi.voxel_resolution as u64;
-            let grid = VoxelGrid::for_scene(scene);
-            let layout =
-                (s.gi.voxel_layout == VoxelLayout::Bricks).then(|| BrickLayout::for_scene(scene, &grid, needs.cones));
-            // Texels of each full-resolution volume: N^3, or its pool of bricks.
-            let n = layout.as_ref().map_or(res * res * res, |l| l.pools[0].texels());
-            let mut vols = vec![4 * n, 4 * n, 8 * n]; // albedo, normal (R32_UINT), radiance (RGBA16F)
-            if needs.emission {
-                vols.push(4 * n);
-            }
-            if needs.dynamic {
-                vols.push(n);
-            }
-            if needs.bounces > 0 {
-                vols.extend([8 * n, 8 * n]); // bounced radiance and the bounce's scratch volume
-            }
-            let pooled = layout.as_ref().map_or(0, |l| l.pools.len() as u32 - 1);
-            if let Some(l) = &layout {
-                // The maps (R32_UINT per brick), the resident-brick lists, and the pooled
-                // directional levels (six RGBA16F volumes each).
-                vols.extend(l.pools.iter().map(|p| 4 * p.map_entries()));
-                vols.push(128 + 4 * l.pools.iter().map(|p| u64::from(p.capacity)).sum::<u64>());
-                if needs.cones {
-                    vols.extend(l.pools[1..].iter().flat_map(|p| [8 * p.texels(); 6]));
-                }
-            }
-            // The work list of occupied voxels (a 64-byte header and 4 bytes per voxel the
-            // triangles can occupy), and with dynamic objects the stale list.
-            let capacity = list_capacity(scene, &VoxelGrid::for_scene(scene));
-            vols.push(64 + 4 * capacity);
-            if needs.dynamic {
-                vols.push(4 * capacity.max(1));
-            }
-            if needs.cones {
-                // Six RGBA16F volumes at half resolution with full mip chains (the levels
-                // that are not pooled).
-                let chain: u64 =
-                    (pooled..s.gi.voxel_resolution.trailing_zeros()).map(|l| ((res / 2) >> l).pow(3) * 8).sum();
-                vols.extend([chain; 6]);
-                if !voxel_view {
-                    let specular = s.gi.specular && scene.materials.iter().any(|m| m.is_glossy());
-                    let per_px = 8 + if specular { 8 } else { 0 } + if cone_shadows(scene) { 4 } else { 0 };
-                    let k = s.gi.downsample as u64;
-                    let low = (iw as u64).div_ceil(k) * (ih as u64).div_ceil(k);
-                    e.targets += per_px * (low + if k > 1 { px } else { 0 });
-                }
+            let vols = voxel_allocations(scene);
+            if VoxelNeeds::of(scene).cones && !voxel_view {
+                let specular = s.gi.specular && scene.materials.iter().any(|m| m.is_glossy());
+                let per_px = 8 + if specular { 8 } else { 0 } + if cone_shadows(scene) { 4 } else { 0 };
+                let k = s.gi.downsample as u64;
+                let low = (iw as u64).div_ceil(k) * (ih as u64).div_ceil(k);
+                e.targets += per_px * (low + if k > 1 { px } else { 0 });
             }
             e.volumes = vols.iter().sum();
             e.largest_volume = vols.iter().copied().max().unwrap_or(0);
@@ -202,6 +162,53 @@ fn mib(bytes: u64) -> String {
     } else {
         format!("{m:.0} MiB")
     }
+}
+
+/// Bytes of each allocation of the voxel volumes (`VoxelVolumes::new`): the full-resolution
+/// volumes (N^3, or pools of bricks), the maps, lists and pooled directional levels of the
+/// bricked layout, the work lists, and the dense directional mip chains.
+fn voxel_allocations(scene: &Scene) -> Vec<u64> {
+    let s = &scene.settings;
+    let needs = VoxelNeeds::of(scene);
+    let res = s.gi.voxel_resolution as u64;
+    let grid = VoxelGrid::for_scene(scene);
+    let layout = (s.gi.voxel_layout == VoxelLayout::Bricks).then(|| BrickLayout::for_scene(scene, &grid, needs.cones));
+    // Texels of each full-resolution volume: N^3, or its pool of bricks.
+    let n = layout.as_ref().map_or(res * res * res, |l| l.pools[0].texels());
+    let mut vols = vec![4 * n, 4 * n, 8 * n]; // albedo, normal (R32_UINT), radiance (RGBA16F)
+    if needs.emission {
+        vols.push(4 * n);
+    }
+    if needs.dynamic {
+        vols.push(n);
+    }
+    if needs.bounces > 0 {
+        vols.extend([8 * n, 8 * n]); // bounced radiance and the bounce's scratch volume
+    }
+    let pooled = layout.as_ref().map_or(0, |l| l.pools.len() as u32 - 1);
+    if let Some(l) = &layout {
+        // The maps (R32_UINT per brick), the resident-brick lists, and the pooled
+        // directional levels (six RGBA16F volumes each).
+        vols.extend(l.pools.iter().map(|p| 4 * p.map_entries()));
+        vols.push(bricks::list_header::SIZE + 4 * l.pools.iter().map(|p| u64::from(p.capacity)).sum::<u64>());
+        if needs.cones {
+            vols.extend(l.pools[1..].iter().flat_map(|p| [8 * p.texels(); 6]));
+        }
+    }
+    // The work list of occupied voxels (a 64-byte header and 4 bytes per voxel the
+    // triangles can occupy), and with dynamic objects the stale list.
+    let capacity = list_capacity(scene, &grid);
+    vols.push(64 + 4 * capacity);
+    if needs.dynamic {
+        vols.push(4 * capacity.max(1));
+    }
+    if needs.cones {
+        // Six RGBA16F volumes at half resolution with full mip chains (the levels that are
+        // not pooled).
+        let chain: u64 = (pooled..s.gi.voxel_resolution.trailing_zeros()).map(|l| ((res / 2) >> l).pow(3) * 8).sum();
+        vols.extend([chain; 6]);
+    }
+    vols
 }
 
 #[cfg(test)]

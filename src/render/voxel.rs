@@ -186,8 +186,7 @@ pub fn list_capacity(scene: &Scene, grid: &VoxelGrid) -> u64 {
             for t in mesh.indices.chunks_exact(3) {
                 let p = [t[0], t[1], t[2]].map(|i| mesh.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO));
                 let count = if moves {
-                    let edge = (p[0] - p[1]).length().max((p[1] - p[2]).length()).max((p[2] - p[0]).length());
-                    let side = (edge * scale * 2.0 / 3f32.sqrt() / vs).min(n as f32);
+                    let side = (swept_cube_side(p, scale) / vs).min(n as f32);
                     let axis = ((side + 0.02).floor() as u64 + 2).min(n);
                     axis.pow(3)
                 } else {
@@ -203,6 +202,14 @@ pub fn list_capacity(scene: &Scene, grid: &VoxelGrid) -> u64 {
         }
     }
     total
+}
+
+/// The side (object units times `scale`) of a cube that holds triangle `p` however it is
+/// rotated and scaled by up to `scale`: as wide as the enclosing sphere of the triangle,
+/// 2/sqrt(3) of its longest edge.
+pub(crate) fn swept_cube_side(p: [Vec3; 3], scale: f32) -> f32 {
+    let edge = (p[0] - p[1]).length().max((p[1] - p[2]).length()).max((p[2] - p[0]).length());
+    edge * scale * 2.0 / 3f32.sqrt()
 }
 
 /// The largest factor by which an object's model matrix can stretch a length at any time
@@ -244,74 +251,34 @@ impl VoxelList {
 
 impl VoxelVolumes {
     pub fn new(ctx: &Arc<Context>, scene: &Scene) -> GpuResult<VoxelVolumes> {
-        if !ctx.info.optional.geometry_shader || !ctx.info.optional.fragment_stores_and_atomics {
-            return Err(GpuError::Limit(format!(
-                "voxel GI needs geometryShader and fragmentStoresAndAtomics, which {} lacks; use --set gi.mode=\"none\"",
-                ctx.info.name
-            )));
-        }
+        check_voxel_features(ctx)?;
         let grid = VoxelGrid::for_scene(scene);
         let needs = VoxelNeeds::of(scene);
         let res = grid.resolution;
         let usage =
             vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC;
+        let sampled = usage | vk::ImageUsageFlags::SAMPLED;
         let bricks = (scene.settings.gi.voxel_layout == VoxelLayout::Bricks)
             .then(|| Bricks::new(ctx, BrickLayout::for_scene(scene, &grid, needs.cones)))
             .transpose()?;
         // Full-resolution volumes: N^3, or the pool of their resident bricks.
         let full_extent = bricks.as_ref().map_or([res; 3], |b| b.layout.pools[0].extent());
-        let volume =
-            |name: &str, format| Image::new(ctx, name, ImageDesc::d3_extent(format, full_extent, usage)).map(Arc::new);
-        let sampled = usage | vk::ImageUsageFlags::SAMPLED;
-        let mip_levels = res.trailing_zeros(); // half resolution down to 1 voxel
-                                               // The directional levels that are not pooled.
-        let pooled = bricks.as_ref().map_or(0, |b| b.layout.pools.len() as u32 - 1);
-        let directional = if needs.cones {
-            ["+x", "-x", "+y", "-y", "+z", "-z"]
-                .iter()
-                .map(|d| {
-                    let desc = ImageDesc::d3(RADIANCE_VOLUME_FORMAT, (res / 2) >> pooled, mip_levels - pooled, sampled);
-                    Image::new(ctx, &format!("voxel radiance {d}"), desc).map(Arc::new)
-                })
-                .collect::<GpuResult<Vec<_>>>()?
-        } else {
-            Vec::new()
+        let volume = |name: &str, format, usage| {
+            Image::new(ctx, name, ImageDesc::d3_extent(format, full_extent, usage)).map(Arc::new)
         };
+        let mip_levels = res.trailing_zeros(); // half resolution down to 1 voxel
+        let pooled = bricks.as_ref().map_or(0, |b| b.layout.pools.len() as u32 - 1);
+        let directional = if needs.cones { directional_volumes(ctx, res, pooled, sampled)? } else { Vec::new() };
         // The bounced radiance and the scratch volume each bounce writes before it is copied in.
         let bounced = if needs.bounces > 0 {
             ["voxel radiance bounced", "voxel bounce scratch"]
                 .iter()
-                .map(|name| {
-                    Image::new(ctx, name, ImageDesc::d3_extent(RADIANCE_VOLUME_FORMAT, full_extent, sampled))
-                        .map(Arc::new)
-                })
+                .map(|name| volume(name, RADIANCE_VOLUME_FORMAT, sampled))
                 .collect::<GpuResult<Vec<_>>>()?
         } else {
             Vec::new()
         };
-        // `--view ao` shows the occlusion whether or not it darkens the final image.
-        let mut gi = scene.settings.gi.clone();
-        gi.ao |= scene.settings.view == View::Ao;
-        let gi_params = Buffer::uniform(ctx, "gi params", &GpuGiParams::new(&gi, res, grid.voxel_size, mip_levels))?;
-        // The bounce's cone set (`gi.bounce_cones`, 0: the per-pixel set).
-        let bounce_cones = if gi.bounce_cones == 0 { gi.diffuse_cones } else { gi.bounce_cones };
-        let bounce_gi = GiSettings { diffuse_cones: bounce_cones, ..gi.clone() };
-        let bounce_params =
-            Buffer::uniform(ctx, "bounce gi params", &GpuGiParams::new(&bounce_gi, res, grid.voxel_size, mip_levels))?;
-        let addr = vk::SamplerAddressMode::CLAMP_TO_BORDER;
-        let sampler = Sampler::new(
-            ctx,
-            "voxel volume sampler",
-            &vk::SamplerCreateInfo::default()
-                .mag_filter(vk::Filter::LINEAR)
-                .min_filter(vk::Filter::LINEAR)
-                .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
-                .address_mode_u(addr)
-                .address_mode_v(addr)
-                .address_mode_w(addr)
-                .border_color(vk::BorderColor::FLOAT_TRANSPARENT_BLACK)
-                .max_lod(mip_levels as f32),
-        )?;
+        let (gi_params, bounce_params) = gi_uniforms(ctx, scene, &grid, mip_levels)?;
         let emission_scale = scene.materials.iter().map(|m| m.emission.max_element()).fold(0.0f32, f32::max).max(1e-6);
         let radiance_scale = crate::render::lights::radiance_scale(scene);
         let grid_buffer = Buffer::uniform(
@@ -327,40 +294,30 @@ impl VoxelVolumes {
         let placeholder = |name: &str, format, usage| {
             Image::new(ctx, name, ImageDesc::d3(format, 1, 1, usage | vk::ImageUsageFlags::TRANSFER_DST)).map(Arc::new)
         };
-        let map_placeholder = placeholder("voxel brick map placeholder", vk::Format::R32_UINT, usage)?;
-        let pool_placeholder = placeholder("voxel brick pool placeholder", RADIANCE_VOLUME_FORMAT, sampled)?;
         Ok(VoxelVolumes {
             grid,
             needs,
             grid_buffer,
-            albedo: volume("voxel albedo", vk::Format::R32_UINT)?,
-            radiance: Image::new(
-                ctx,
-                "voxel radiance",
-                ImageDesc::d3_extent(RADIANCE_VOLUME_FORMAT, full_extent, sampled),
-            )
-            .map(Arc::new)?,
+            albedo: volume("voxel albedo", vk::Format::R32_UINT, usage)?,
+            radiance: volume("voxel radiance", RADIANCE_VOLUME_FORMAT, sampled)?,
             bounced,
             directional,
             gi_params,
             bounce_params,
-            sampler,
-            normal: volume("voxel normal", vk::Format::R32_UINT)?,
-            emission: needs.emission.then(|| volume("voxel emission", vk::Format::R32_UINT)).transpose()?,
-            flags: needs.dynamic.then(|| volume("voxel static flags", vk::Format::R8_UINT)).transpose()?,
+            sampler: volume_sampler(ctx, mip_levels)?,
+            normal: volume("voxel normal", vk::Format::R32_UINT, usage)?,
+            emission: needs.emission.then(|| volume("voxel emission", vk::Format::R32_UINT, usage)).transpose()?,
+            flags: needs.dynamic.then(|| volume("voxel static flags", vk::Format::R8_UINT, usage)).transpose()?,
             flags_placeholder: (!needs.dynamic)
-                .then(|| {
-                    Image::new(ctx, "voxel flags placeholder", ImageDesc::d3(vk::Format::R8_UINT, 1, 1, usage))
-                        .map(Arc::new)
-                })
+                .then(|| placeholder("voxel flags placeholder", vk::Format::R8_UINT, usage))
                 .transpose()?,
             emission_scale,
             radiance_scale,
             diffuse_rays: scene.settings.gi.diffuse_rays,
             list: VoxelList::new(ctx, list_capacity(scene, &grid), needs.dynamic)?,
             bricks,
-            map_placeholder,
-            pool_placeholder,
+            map_placeholder: placeholder("voxel brick map placeholder", vk::Format::R32_UINT, usage)?,
+            pool_placeholder: placeholder("voxel brick pool placeholder", RADIANCE_VOLUME_FORMAT, sampled)?,
         })
     }
 
@@ -411,7 +368,7 @@ impl VoxelVolumes {
         v
     }
 
-    /// The volumes at full resolution (one texel per voxel): what a sparse layout would brick.
+    /// The volumes at full resolution (one texel per voxel; pool 0 of the bricked layout).
     pub fn full_resolution(&self) -> Vec<&Arc<Image>> {
         let mut v = vec![&self.albedo, &self.normal];
         v.extend(self.emission.as_ref());
@@ -585,6 +542,66 @@ impl Occupancy {
             bricks(8)
         )
     }
+}
+
+fn check_voxel_features(ctx: &Context) -> GpuResult<()> {
+    if !ctx.info.optional.geometry_shader || !ctx.info.optional.fragment_stores_and_atomics {
+        return Err(GpuError::Limit(format!(
+            "voxel GI needs geometryShader and fragmentStoresAndAtomics, which {} lacks; use --set gi.mode=\"none\"",
+            ctx.info.name
+        )));
+    }
+    Ok(())
+}
+
+/// The six directional volumes (+x, -x, +y, -y, +z, -z) at half resolution, with the mip
+/// levels from `pooled` on (the levels below are in brick pools).
+fn directional_volumes(
+    ctx: &Arc<Context>,
+    res: u32,
+    pooled: u32,
+    usage: vk::ImageUsageFlags,
+) -> GpuResult<Vec<Arc<Image>>> {
+    let levels = res.trailing_zeros() - pooled;
+    ["+x", "-x", "+y", "-y", "+z", "-z"]
+        .iter()
+        .map(|d| {
+            let desc = ImageDesc::d3(RADIANCE_VOLUME_FORMAT, (res / 2) >> pooled, levels, usage);
+            Image::new(ctx, &format!("voxel radiance {d}"), desc).map(Arc::new)
+        })
+        .collect()
+}
+
+/// The cone-tracing parameters of the per-pixel tracer and of the bounce (`gi.bounce_cones`,
+/// 0: the per-pixel cone set).
+fn gi_uniforms(ctx: &Arc<Context>, scene: &Scene, grid: &VoxelGrid, mip_levels: u32) -> GpuResult<(Buffer, Buffer)> {
+    // `--view ao` shows the occlusion whether or not it darkens the final image.
+    let mut gi = scene.settings.gi.clone();
+    gi.ao |= scene.settings.view == View::Ao;
+    let (res, vs) = (grid.resolution, grid.voxel_size);
+    let gi_params = Buffer::uniform(ctx, "gi params", &GpuGiParams::new(&gi, res, vs, mip_levels))?;
+    let bounce_cones = if gi.bounce_cones == 0 { gi.diffuse_cones } else { gi.bounce_cones };
+    let bounce_gi = GiSettings { diffuse_cones: bounce_cones, ..gi };
+    let bounce_params = Buffer::uniform(ctx, "bounce gi params", &GpuGiParams::new(&bounce_gi, res, vs, mip_levels))?;
+    Ok((gi_params, bounce_params))
+}
+
+/// Trilinear, mipmapped, transparent black outside the grid.
+fn volume_sampler(ctx: &Arc<Context>, mip_levels: u32) -> GpuResult<Sampler> {
+    let addr = vk::SamplerAddressMode::CLAMP_TO_BORDER;
+    Sampler::new(
+        ctx,
+        "voxel volume sampler",
+        &vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::LINEAR)
+            .min_filter(vk::Filter::LINEAR)
+            .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+            .address_mode_u(addr)
+            .address_mode_v(addr)
+            .address_mode_w(addr)
+            .border_color(vk::BorderColor::FLOAT_TRANSPARENT_BLACK)
+            .max_lod(mip_levels as f32),
+    )
 }
 
 /// The pools' uniform (`VoxelGrid.pools`): slots per axis and map side of each pool.
