@@ -39,13 +39,15 @@ ivec3 src_texel(ivec3 C) {
     return SRC_POOL == 0 ? C : level_texel(SRC_POOL, C);
 }
 
-// From the full-resolution volume every face reads the same 2x2x2 block: loaded once.
+// Every face reads the same 2x2x2 block of the level below, stored at the same places in
+// each face's image: where, found once (from the full-resolution volume, also what).
+ivec3 block_texel[8];
 vec4 full_block[8];
 
-void load_full_block(ivec3 base) {
+void find_block(ivec3 base) {
     for (int i = 0; i < 8; ++i) {
-        ivec3 t = src_texel(base + ivec3(i & 1, (i >> 1) & 1, i >> 2));
-        full_block[i] = t.x < 0 ? vec4(0.0) : imageLoad(src[0], t);
+        block_texel[i] = src_texel(base + ivec3(i & 1, (i >> 1) & 1, i >> 2));
+        if (FROM_FULL) full_block[i] = block_texel[i].x < 0 ? vec4(0.0) : imageLoad(src[0], block_texel[i]);
     }
 }
 
@@ -54,8 +56,9 @@ void load_full_block(ivec3 base) {
 #define DEFINE_LOAD(FACE)                                                             \
     vec4 load_##FACE(ivec3 C) {                                                       \
         ivec3 o = C & 1;                                                              \
-        if (FROM_FULL) return full_block[o.x + 2 * o.y + 4 * o.z];                    \
-        ivec3 t = src_texel(C);                                                       \
+        int i = o.x + 2 * o.y + 4 * o.z;                                              \
+        if (FROM_FULL) return full_block[i];                                          \
+        ivec3 t = block_texel[i];                                                     \
         return t.x < 0 ? vec4(0.0) : alpha_from_tau(imageLoad(src[FACE], t));        \
     }
 DEFINE_LOAD(0)
@@ -96,7 +99,7 @@ void main() {
         if (store_at.x < 0) return;
     }
     ivec3 base = c * 2;
-    if (FROM_FULL) load_full_block(base);
+    find_block(base);
     INTEGRATE(0, 0, 0)  // +x: cones travelling +x meet low x first
     INTEGRATE(1, 0, 1)  // -x
     INTEGRATE(2, 1, 0)  // +y

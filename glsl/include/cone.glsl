@@ -15,16 +15,14 @@
 #include "bricks.glsl"
 #include "cone_params.glsl"
 
-// Directional volume `face` (literal) of pooled level l (0..2): trilinear within one brick.
-#define POOLED_FACE(face, l, pos)                                                              \
-    (l == 0 ? pooled_lookup(aniso_pool[face], 1, pos)                                           \
-            : (l == 1 ? pooled_lookup(aniso_pool[6 + face], 2, pos) : pooled_lookup(aniso_pool[12 + face], 3, pos)))
+// Directional volume `face` (literal) of pooled level l (0..2) at normalized pool
+// coordinates q: trilinear within one brick (every face's pool has the same layout).
+#define POOLED_FACE(face, l, q)                                                                  \
+    (l == 0 ? pooled_texel(aniso_pool[face], q)                                                   \
+            : (l == 1 ? pooled_texel(aniso_pool[6 + face], q) : pooled_texel(aniso_pool[12 + face], q)))
 
-vec4 pooled_lookup(texture3D pool_image, int pool, vec3 pos) {
-    vec4 q = level_lookup(pool, pos);
-    if (q.w == 0.0) return vec4(0.0);
-    vec3 extent = vec3(grid.pools[pool].xyz * 9u);
-    return textureLod(sampler3D(pool_image, pool_sampler), q.xyz / extent, 0.0);
+vec4 pooled_texel(texture3D pool_image, vec3 q) {
+    return textureLod(sampler3D(pool_image, pool_sampler), q, 0.0);
 }
 
 // The directional volumes at integer level l, blended by the squared components of `dir`.
@@ -38,10 +36,13 @@ vec4 anisotropic_level(vec3 uvw, vec3 dir, int l) {
         y = dir.y >= 0.0 ? textureLod(aniso[2], uvw, d) : textureLod(aniso[3], uvw, d);
         z = dir.z >= 0.0 ? textureLod(aniso[4], uvw, d) : textureLod(aniso[5], uvw, d);
     } else {
-        vec3 pos = uvw * float(pool_level_side(l + 1));
-        x = dir.x >= 0.0 ? POOLED_FACE(0, l, pos) : POOLED_FACE(1, l, pos);
-        y = dir.y >= 0.0 ? POOLED_FACE(2, l, pos) : POOLED_FACE(3, l, pos);
-        z = dir.z >= 0.0 ? POOLED_FACE(4, l, pos) : POOLED_FACE(5, l, pos);
+        // One map lookup serves the three faces.
+        vec4 p = level_lookup(l + 1, uvw * float(pool_level_side(l + 1)));
+        if (p.w == 0.0) return vec4(0.0);
+        vec3 q = p.xyz / vec3(grid.pools[l + 1].xyz * 9u);
+        x = dir.x >= 0.0 ? POOLED_FACE(0, l, q) : POOLED_FACE(1, l, q);
+        y = dir.y >= 0.0 ? POOLED_FACE(2, l, q) : POOLED_FACE(3, l, q);
+        z = dir.z >= 0.0 ? POOLED_FACE(4, l, q) : POOLED_FACE(5, l, q);
     }
     return (x * w.x + y * w.y + z * w.z) / max(w.x + w.y + w.z, 1e-12);
 }
@@ -74,12 +75,23 @@ vec4 full_fetch(ivec3 c) {
 }
 
 // The full-resolution radiance, trilinear: by the sampler when dense, by eight lookups when
-// bricked (its bricks have no apron).
+// bricked (its bricks have no apron), through one map lookup when the eight share a brick.
 vec4 sample_full(vec3 uvw) {
     if (!bricked()) return textureLod(vox_lod0, uvw, 0.0);
     vec3 p = uvw * float(grid.dims.x) - 0.5;
     ivec3 c = ivec3(floor(p));
     vec3 f = p - vec3(c);
+    if (all(equal(c >> 3, (c + 1) >> 3)) && all(greaterThanEqual(c, ivec3(0))) &&
+        all(lessThan(c + 1, ivec3(int(grid.dims.x))))) {
+        uint s = brick_slot(0, c >> 3);
+        if (s == 0u) return vec4(0.0);
+        ivec3 t = slot_texel(0, s - 1u, 8) + (c & 7);
+        vec4 y0 = mix(mix(texelFetch(vox_lod0, t, 0), texelFetch(vox_lod0, t + ivec3(1, 0, 0), 0), f.x),
+                      mix(texelFetch(vox_lod0, t + ivec3(0, 1, 0), 0), texelFetch(vox_lod0, t + ivec3(1, 1, 0), 0), f.x), f.y);
+        vec4 y1 = mix(mix(texelFetch(vox_lod0, t + ivec3(0, 0, 1), 0), texelFetch(vox_lod0, t + ivec3(1, 0, 1), 0), f.x),
+                      mix(texelFetch(vox_lod0, t + ivec3(0, 1, 1), 0), texelFetch(vox_lod0, t + ivec3(1, 1, 1), 0), f.x), f.y);
+        return mix(y0, y1, f.z);
+    }
     vec4 x00 = mix(full_fetch(c), full_fetch(c + ivec3(1, 0, 0)), f.x);
     vec4 x10 = mix(full_fetch(c + ivec3(0, 1, 0)), full_fetch(c + ivec3(1, 1, 0)), f.x);
     vec4 x01 = mix(full_fetch(c + ivec3(0, 0, 1)), full_fetch(c + ivec3(1, 0, 1)), f.x);
