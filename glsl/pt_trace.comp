@@ -35,8 +35,8 @@ struct BvhNode {
 
 struct Tri {
     vec4 v0;  // w bits: material index
-    vec4 e1;
-    vec4 e2;
+    vec4 v1;
+    vec4 v2;
 };
 
 struct TriShade {
@@ -134,8 +134,58 @@ struct Hit {
     vec2 uv;
 };
 
-// Closest hit before t_max (or any hit, with `any_hit`). Möller–Trumbore, both faces.
+// The watertight ray-triangle test (Woop, Benthin and Wald, JCGT 2013): the ray's frame puts
+// its direction on the z axis (`WaterRay`), each vertex is sheared into it, and the three edge
+// functions decide the hit. An edge shared by two triangles is evaluated from the same two
+// sheared vertices in both, so a ray through it hits at least one of them (Möller–Trumbore
+// does not promise that: on a GPU whose compiler fuses its products differently, a ray along
+// the diagonal of a quad passed between its two triangles). `precise` keeps the compiler from
+// fusing the products, which would break the symmetry. Both faces count.
+struct WaterRay {
+    ivec3 k;     // the axes kx, ky, kz (kz: the largest component of d)
+    vec3 shear;  // (-d[kx] / d[kz], -d[ky] / d[kz], 1 / d[kz])
+};
+
+WaterRay water_ray(vec3 d) {
+    vec3 a = abs(d);
+    int kz = a.x > a.y ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2);
+    int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
+    if (d[kz] < 0.0) {
+        int tmp = kx;
+        kx = ky;
+        ky = tmp;
+    }
+    return WaterRay(ivec3(kx, ky, kz), vec3(-d[kx] / d[kz], -d[ky] / d[kz], 1.0 / d[kz]));
+}
+
+// Vertex v relative to the ray origin o, sheared: (x, y) in the plane across the ray, z along it.
+vec3 shear_vertex(WaterRay r, vec3 o, vec3 v) {
+    precise vec3 a = v - o;
+    precise float x = a[r.k.x] + r.shear.x * a[r.k.z];
+    precise float y = a[r.k.y] + r.shear.y * a[r.k.z];
+    return vec3(x, y, r.shear.z * a[r.k.z]);
+}
+
+// The hit distance in t (0 < t < t_max) and the barycentrics of v1 and v2 in b.
+bool hit_triangle(WaterRay r, vec3 o, Tri tri, float t_max, out float t, out vec2 b) {
+    vec3 A = shear_vertex(r, o, tri.v0.xyz);
+    vec3 B = shear_vertex(r, o, tri.v1.xyz);
+    vec3 C = shear_vertex(r, o, tri.v2.xyz);
+    precise float U = C.x * B.y - C.y * B.x;
+    precise float V = A.x * C.y - A.y * C.x;
+    precise float W = B.x * A.y - B.y * A.x;
+    if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0)) return false;
+    float det = U + V + W;
+    if (det == 0.0) return false;
+    float inv_det = 1.0 / det;
+    t = (U * A.z + V * B.z + W * C.z) * inv_det;
+    b = vec2(V, W) * inv_det;
+    return t > 0.0 && t < t_max;
+}
+
+// Closest hit before t_max (or any hit, with `any_hit`).
 bool trace(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
+    WaterRay wr = water_ray(d);
     hit.t = t_max;
     hit.tri = 0u;
     hit.uv = vec2(0.0);
@@ -154,22 +204,12 @@ bool trace(vec3 o, vec3 d, float t_max, bool any_hit, out Hit hit) {
         // A leaf, or the empty root of a scene without triangles (no inner node points at 0).
         if (count > 0u || first == 0u) {
             for (uint i = first; i < first + count; ++i) {
-                Tri tri = tris[i];
-                vec3 p = cross(d, tri.e2.xyz);
-                float det = dot(tri.e1.xyz, p);
-                if (abs(det) < 1e-20) continue;
-                float inv_det = 1.0 / det;
-                vec3 s = o - tri.v0.xyz;
-                float u = dot(s, p) * inv_det;
-                if (u < 0.0 || u > 1.0) continue;
-                vec3 q = cross(s, tri.e1.xyz);
-                float v = dot(d, q) * inv_det;
-                if (v < 0.0 || u + v > 1.0) continue;
-                float t = dot(tri.e2.xyz, q) * inv_det;
-                if (t > 0.0 && t < hit.t && opaque_at(i, vec2(u, v))) {
+                float t;
+                vec2 b;
+                if (hit_triangle(wr, o, tris[i], hit.t, t, b) && opaque_at(i, b)) {
                     hit.t = t;
                     hit.tri = i;
-                    hit.uv = vec2(u, v);
+                    hit.uv = b;
                     found = true;
                     if (any_hit) return true;
                 }
@@ -223,7 +263,7 @@ struct Surface {
 // same as the G-buffer's), in the triangle's own UV frame. A uniform loop over the textures, as
 // texel() does.
 vec3 bent_normal(Material m, Tri tri, TriShade sh, vec2 uv, vec3 n) {
-    UvFrame f = uv_frame(tri.e1.xyz, tri.e2.xyz, sh.uv01.zw - sh.uv01.xy, sh.uv2.xy - sh.uv01.xy);
+    UvFrame f = uv_frame(tri.v1.xyz - tri.v0.xyz, tri.v2.xyz - tri.v0.xyz, sh.uv01.zw - sh.uv01.xy, sh.uv2.xy - sh.uv01.xy);
     vec3 p = n;
     [[dont_unroll]] for (uint i = 0u; i < TEXTURE_COUNT; ++i) {
         if (i == uint(m.texture.z)) p = mapped_normal(textures[i], texture_sampler, m.texture.w, n, f, uv, m.emission.a);
@@ -237,8 +277,8 @@ Surface surface_at(Hit h, vec3 o, vec3 d) {
     TriShade sh = shades[h.tri];
     Surface s;
     float w = 1.0 - h.uv.x - h.uv.y;
-    s.P = tri.v0.xyz + tri.e1.xyz * h.uv.x + tri.e2.xyz * h.uv.y;
-    vec3 ng = safe_normalize(cross(tri.e1.xyz, tri.e2.xyz), -d);
+    s.P = tri.v0.xyz * (1.0 - h.uv.x - h.uv.y) + tri.v1.xyz * h.uv.x + tri.v2.xyz * h.uv.y;
+    vec3 ng = safe_normalize(cross(tri.v1.xyz - tri.v0.xyz, tri.v2.xyz - tri.v0.xyz), -d);
     if (dot(ng, d) > 0.0) ng = -ng;
     vec3 n = safe_normalize(sh.n0.xyz * w + sh.n1.xyz * h.uv.x + sh.n2.xyz * h.uv.y, ng);
     if (dot(n, ng) < 0.0) n = -n;

@@ -105,6 +105,10 @@ pub struct ModeReport {
     /// The voxel work list after the mode's last frame (absent without voxels).
     #[serde(default)]
     pub occupancy: Option<crate::render::voxel::Occupancy>,
+    /// The voxel layout and what its volumes take after the mode's last frame (absent
+    /// without voxels).
+    #[serde(default)]
+    pub voxel_memory: Option<crate::render::bricks::VoxelMemory>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -489,6 +493,7 @@ pub fn measure_renderer(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::
         timeline,
         // Read after the measured frames (a readback of its own, never inside a frame).
         occupancy: r.voxel_list()?.map(|l| l.occupancy()),
+        voxel_memory: r.voxel_memory()?,
     };
     Ok((report, calibrated))
 }

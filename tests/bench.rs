@@ -76,7 +76,16 @@ fn bench_smoke_writes_schema_valid_json_and_a_timeline() {
             if scenario == "static" {
                 assert_eq!(Some(o), typed.modes[0].occupancy, "{}", m.mode);
             }
+            // The default bricked layout: resident full-resolution bricks are the occupied 8^3
+            // bricks, in less memory than the dense layout's estimate.
+            let v = m.voxel_memory.as_ref().expect("the voxel layout");
+            assert_eq!(v.layout, "bricks", "{v:?}");
+            assert_eq!(u64::from(v.pools[0].resident), o.bricks8, "{v:?}");
+            assert_eq!((v.pools[0].level_side, v.pools[0].grid_bricks), (16, 8), "{v:?}");
+            assert!(v.pools.iter().all(|p| p.resident <= p.capacity && p.bytes > 0), "{v:?}");
+            assert!(v.bytes > 0 && v.dense_bytes > 0, "{v:?}");
         }
+        assert!(out.contains("voxel layout: bricks of 8³"), "{out}");
         assert!(out.contains("occupied voxels (work list):"), "{out}");
         if common::under_split_queues() {
             assert!(typed.device.queue_topology.contains("dedicated compute-only family"), "{:?}", typed.device);

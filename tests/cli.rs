@@ -233,7 +233,7 @@ fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
     let out = stdout(&o);
     assert!(
         out.contains(
-            "voxel clear dynamic -> mark bricks dynamic -> allocate bricks dynamic -> voxelize dynamic -> voxel list (dynamic)"
+            "voxel clear dynamic -> release bricks dynamic -> mark bricks dynamic -> allocate bricks dynamic -> clear bricks dynamic -> voxelize dynamic -> voxel list (dynamic)"
         ),
         "{out}"
     );

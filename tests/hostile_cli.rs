@@ -196,7 +196,11 @@ fn counts_and_thresholds_are_bounded() {
         assert_eq!(o.status.code(), Some(2), "{bad}: {}", stderr(&o));
         assert!(stderr(&o).contains(name), "{bad}: {}", stderr(&o));
     }
-    // A soak that runs and breaks a threshold (none allowed at all) is not a usage error.
+    // A soak that runs with thresholds of zero is not a usage error: it fails (exit 3) exactly
+    // when what it reports grew or drifted (lavapipe's resident memory grows a little; a GPU
+    // driver's may not, and a deterministic image does not drift).
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("soak.json");
     let o = soak(&[
         "--modes",
         "sync",
@@ -210,8 +214,21 @@ fn counts_and_thresholds_are_bounded() {
         "0",
         "--max-rss-growth-mib",
         "0",
+        "--json",
+        json.to_str().unwrap(),
     ]);
-    assert_eq!(o.status.code(), Some(3), "{}{}", stdout(&o), stderr(&o));
+    // The verdict from the samples it recorded (growth: the last sample against the second).
+    let out = stdout(&o);
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let samples = report["modes"][0]["samples"].as_array().expect("samples").clone();
+    let at = |i: usize, key: &str| samples[i][key].as_f64().unwrap_or_else(|| panic!("{key}: {report}"));
+    let last = samples.len() - 1;
+    let grew = |key: &str| at(last, key) != at(1, key);
+    let broken = at(last, "rss_bytes") > at(1, "rss_bytes")
+        || ["gpu_allocated_bytes", "gpu_block_bytes", "gpu_allocations"].iter().any(|k| grew(k))
+        || (0..=last).any(|i| at(i, "drift") > 0.0);
+    assert_eq!(o.status.code(), Some(if broken { 3 } else { 0 }), "{out}{}", stderr(&o));
+    assert_eq!(out.contains("FAILED: memory grew or the image drifted"), broken, "{out}");
 }
 
 /// `dvsgi info | head -1`: a closed stdout ends the output, it is no crash, and the files a

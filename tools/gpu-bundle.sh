@@ -6,8 +6,9 @@
 #
 # DIR then holds bundle.tar.xz with: the release binaries (dvsgi, bench, soak), every test
 # executable (they find the repository through the path they were built in, recorded in
-# manifest-dir), the shared scenes the report renders (Cornell box, Dabrovic's Sponza), and
-# the Debian packages of the Vulkan loader and the Khronos validation layer. On the GPU
+# manifest-dir), the shared scenes the report and the tests render (Cornell box, Dabrovic's Sponza,
+# bump-test; not Crytek's Sponza, 70 MiB), and
+# the Debian packages of the Vulkan loader, the Khronos validation layer and libglvnd. On the GPU
 # machine, from the repository root:
 #
 #   tools/gpu-report.sh --bundle DIR OUT_DIR
@@ -53,14 +54,17 @@ git status --porcelain --untracked-files=no | grep -q . && echo "(with uncommitt
 echo "gpu-bundle: shared scenes"
 scenes="$root/../shared/scenes"
 cp "$scenes/README.md" "$stage/shared/scenes/" 2>/dev/null || true
-cp -r "$scenes/cornell-box" "$scenes/sponza-dabrovic" "$stage/shared/scenes/"
+cp -r "$scenes/cornell-box" "$scenes/sponza-dabrovic" "$scenes/bump-test" "$stage/shared/scenes/"
 
 echo "gpu-bundle: Vulkan loader and validation layer packages (amd64)"
 lists="$(mktemp -d)"
 o=(-q -oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists="$lists" -oAPT::Sandbox::User=root)
 mkdir -p "$lists/partial"
 apt-get "${o[@]}" update -qq
-(cd "$stage/debs" && apt-get "${o[@]}" download libvulkan1 vulkan-validationlayers)
+# The NVIDIA Vulkan driver (libGLX_nvidia) needs libglvnd's dispatch libraries, which a
+# CUDA-only image may lack: without them the loader finds no driver.
+(cd "$stage/debs" && apt-get "${o[@]}" download libvulkan1 vulkan-validationlayers libglvnd0 libgl1 libglx0 \
+  libegl1 libgles2 libopengl0)
 rm -rf "$lists"
 
 tar -C "$stage" -cJf "$dir/bundle.tar.xz" .

@@ -302,6 +302,9 @@ fn print_table(ctx: &Context, r: &Report) {
     if let Some(o) = r.modes.iter().find_map(|m| m.occupancy) {
         outln!("occupied voxels (work list): {}", o.summary());
     }
+    if let Some(v) = r.modes.iter().find_map(|m| m.voxel_memory.as_ref()) {
+        outln!("{}", v.summary()[0]);
+    }
     row("host waits: in frame / slot reuse", &|m| format!("{} / {}", m.host_waits.in_frame, m.host_waits.slot_reuse));
     if ctx.info.is_cpu() {
         outln!(

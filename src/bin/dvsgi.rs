@@ -716,28 +716,10 @@ fn occupancy(renderer: &mut Renderer, time: f32) -> dvsgi::Result<()> {
     let Some(list) = renderer.voxel_list()? else { return Ok(()) };
     let o = list.occupancy();
     outln!("  occupied voxels (first frame): {}", o.summary());
-    let v = renderer.voxels().expect("voxels");
-    let bytes: u64 = v.all().iter().map(|i| i.bytes).sum();
-    let full: u64 = v.full_resolution().iter().map(|i| i.bytes).sum();
-    let pool_bytes: Vec<u64> = std::iter::once(full)
-        .chain(v.bricks.iter().flat_map(|b| b.directional.iter().map(|l| l.iter().map(|i| i.bytes).sum())))
-        .collect();
-    let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
-    let mut dense_scene = renderer.scene.clone();
-    dense_scene.settings.gi.voxel_layout = dvsgi::scene::VoxelLayout::Dense;
-    let dense = dvsgi::render::budget::Estimate::of(&dense_scene).volumes;
-    let Some(snapshot) = renderer.resident_bricks()? else {
-        outln!("  voxel layout: dense ({:.2} MiB of volumes)", mib(bytes));
-        return Ok(());
-    };
-    outln!(
-        "  voxel layout: bricks of 8³, {:.2} MiB of volumes, maps and lists ({:.3} of the dense layout's {:.2} MiB)",
-        mib(bytes),
-        bytes as f64 / dense.max(1) as f64,
-        mib(dense)
-    );
-    for line in snapshot.summary(&pool_bytes) {
-        outln!("  {line}");
+    if let Some(memory) = renderer.voxel_memory()? {
+        for line in memory.summary() {
+            outln!("  {line}");
+        }
     }
     Ok(())
 }

@@ -289,27 +289,39 @@ fn box_hit(n: &BvhNode, o: Vec3, inv: Vec3, t_max: f32) -> Option<f32> {
     (t0 <= t1).then_some(t0)
 }
 
-/// Möller–Trumbore; the hit distance if positive. Both faces count.
+/// The watertight ray-triangle test (Woop, Benthin and Wald, JCGT 2013), as `hit_triangle` in
+/// glsl/pt_trace.comp: the hit distance if positive. Both faces count; a ray through an edge
+/// two triangles share hits at least one of them.
 pub fn intersect_triangle(t: &[Vec3; 3], o: Vec3, d: Vec3) -> Option<f32> {
-    let e1 = t[1] - t[0];
-    let e2 = t[2] - t[0];
-    let p = d.cross(e2);
-    let det = e1.dot(p);
-    if det.abs() < 1e-20 {
+    let a = d.abs();
+    let kz = if a.x > a.y && a.x > a.z {
+        0
+    } else if a.y > a.z {
+        1
+    } else {
+        2
+    };
+    let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    if d[kz] < 0.0 {
+        std::mem::swap(&mut kx, &mut ky);
+    }
+    let shear = Vec3::new(-d[kx] / d[kz], -d[ky] / d[kz], 1.0 / d[kz]);
+    let sheared = |v: Vec3| {
+        let a = v - o;
+        Vec3::new(a[kx] + shear.x * a[kz], a[ky] + shear.y * a[kz], shear.z * a[kz])
+    };
+    let [a, b, c] = t.map(sheared);
+    let u = c.x * b.y - c.y * b.x;
+    let v = a.x * c.y - a.y * c.x;
+    let w = b.x * a.y - b.y * a.x;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
         return None;
     }
-    let inv = 1.0 / det;
-    let s = o - t[0];
-    let u = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
+    let det = u + v + w;
+    if det == 0.0 {
         return None;
     }
-    let q = s.cross(e1);
-    let v = d.dot(q) * inv;
-    if v < 0.0 || u + v > 1.0 {
-        return None;
-    }
-    let t = e2.dot(q) * inv;
+    let t = (u * a.z + v * b.z + w * c.z) / det;
     (t > 0.0).then_some(t)
 }
 
@@ -402,5 +414,29 @@ mod tests {
         assert!(b.intersect(&same, Vec3::new(0.2, 0.2, 1.0), -Vec3::Z, f32::INFINITY).is_some());
         let flat = [[Vec3::ZERO, Vec3::X, Vec3::X * 2.0]];
         assert!(Bvh::build(&flat).intersect(&flat, Vec3::new(0.5, 0.0, 1.0), -Vec3::Z, f32::INFINITY).is_none());
+    }
+
+    /// Rays aimed at points of the edge two triangles share (a quad's diagonal, tilted, off
+    /// the origin) hit one of them, every one; rays just past the quad's outer edges miss.
+    #[test]
+    fn rays_through_a_shared_edge_never_pass_between_the_triangles() {
+        let mut r = Rng(7);
+        for _ in 0..200 {
+            let base = r.v() * 20.0 - 10.0;
+            let (u, v) = (r.v() * 3.0 + Vec3::splat(0.1), r.v() * 3.0 + Vec3::splat(0.1));
+            let quad = [base, base + u, base + u + v, base + v];
+            let tris = [[quad[0], quad[1], quad[2]], [quad[0], quad[2], quad[3]]];
+            for _ in 0..50 {
+                let on_edge = quad[0].lerp(quad[2], r.f());
+                let o = on_edge + (r.v() - 0.5).normalize() * (1.0 + 10.0 * r.f());
+                let d = on_edge - o;
+                let hits = tris.iter().filter(|t| intersect_triangle(t, o, d).is_some()).count();
+                assert!(hits >= 1, "a ray from {o} through {on_edge} on the shared edge passed between");
+            }
+        }
+        let one = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        assert!(intersect_triangle(&one, Vec3::new(-1e-3, 0.5, 1.0), -Vec3::Z).is_none());
+        assert!(intersect_triangle(&one, Vec3::new(0.5, 0.5 + 1e-3, 1.0), -Vec3::Z).is_none());
+        assert_eq!(intersect_triangle(&one, Vec3::new(0.25, 0.25, 2.0), -Vec3::Z), Some(2.0));
     }
 }

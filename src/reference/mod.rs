@@ -111,8 +111,8 @@ struct PtParams {
 #[derive(Clone, Copy, Pod, Zeroable, Debug)]
 struct GpuTri {
     v0: [f32; 4],
-    e1: [f32; 4],
-    e2: [f32; 4],
+    v1: [f32; 4],
+    v2: [f32; 4],
 }
 
 /// Mirrors `TriShade` in glsl/pt_trace.comp.
@@ -238,11 +238,7 @@ impl PathTracer {
             let i = i as usize;
             let [a, b, c] = tris.corners[i];
             let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
-            gpu_tris.push(GpuTri {
-                v0: v4(a, f32::from_bits(tris.materials[i])),
-                e1: v4(b - a, 0.0),
-                e2: v4(c - a, 0.0),
-            });
+            gpu_tris.push(GpuTri { v0: v4(a, f32::from_bits(tris.materials[i])), v1: v4(b, 0.0), v2: v4(c, 0.0) });
             let [n0, n1, n2] = tris.normals[i];
             let [t0, t1, t2] = tris.uvs[i];
             shades.push(GpuTriShade {

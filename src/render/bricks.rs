@@ -226,12 +226,18 @@ pub mod list_header {
     pub fn range(pool: usize) -> u64 {
         16 * pool as u64
     }
-    /// Word indices of the per-pool arrays after the ranges: first entry, capacity, dropped.
+    /// Word indices of the per-pool arrays after the ranges: first entry, capacity, dropped,
+    /// static bricks.
     pub const FIRST: usize = 16;
     pub const CAPACITY: usize = 20;
     pub const DROPPED: usize = 24;
-    /// Header size; the entries follow.
-    pub const SIZE: u64 = 128;
+    pub const STATIC: usize = 28;
+    /// Per pool: a `VkDispatchIndirectCommand` over its dynamic bricks and their count.
+    pub fn dynamic_range(pool: usize) -> u64 {
+        128 + 16 * pool as u64
+    }
+    /// Header size in bytes; the entries follow.
+    pub const SIZE: u64 = 192;
 }
 
 /// The GPU side of a bricked layout: one map per pool, the pooled directional levels and the
@@ -297,8 +303,8 @@ impl Bricks {
 
     /// The lists' header with nothing resident: where each pool's entries start and how many
     /// it may hold (`BrickListBlock`).
-    pub fn empty_header(&self) -> [u32; 32] {
-        let mut h = [0u32; 32];
+    pub fn empty_header(&self) -> [u32; list_header::SIZE as usize / 4] {
+        let mut h = [0u32; list_header::SIZE as usize / 4];
         let mut first = 0;
         for (i, p) in self.layout.pools.iter().enumerate() {
             h[list_header::FIRST + i] = first;
@@ -348,27 +354,90 @@ impl BrickSnapshot {
             .collect();
         BrickSnapshot { pools }
     }
+}
 
-    /// One line per pool: resident bricks of the capacity and of the map, and the bytes of the
-    /// pool's images (`pool_bytes`, one figure per pool).
-    pub fn summary(&self, pool_bytes: &[u64]) -> Vec<String> {
+/// What the voxel volumes take on the device, as `info` prints it and `bench --json` records
+/// it (`Renderer::voxel_memory`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VoxelMemory {
+    /// "bricks" or "dense".
+    pub layout: String,
+    /// Bytes allocated for the voxel volumes, the brick maps and pools, and the voxel and
+    /// brick lists (what the budget's estimate counts as volumes).
+    pub bytes: u64,
+    /// The budget's estimate of the same volumes in the dense layout at this resolution.
+    pub dense_bytes: u64,
+    /// One entry per pool: full resolution first, then the pooled directional levels (none
+    /// in the dense layout).
+    pub pools: Vec<PoolMemory>,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PoolMemory {
+    /// Texels per side of the level the pool holds.
+    pub level_side: u32,
+    /// Texels per side of a brick in the pool (8, or 9 with the filtering apron).
+    pub brick_stride: u32,
+    /// Bricks resident after the last frame.
+    pub resident: u32,
+    /// Slots allocated.
+    pub capacity: u32,
+    /// Bricks in the level's grid (what a dense volume stores).
+    pub grid_bricks: u64,
+    /// Bytes of the pool's images.
+    pub bytes: u64,
+}
+
+impl VoxelMemory {
+    /// Allocated over the dense estimate.
+    pub fn ratio(&self) -> f64 {
+        self.bytes as f64 / self.dense_bytes.max(1) as f64
+    }
+
+    /// The lines `info` prints.
+    pub fn summary(&self) -> Vec<String> {
         let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+        if self.layout == "dense" {
+            return vec![format!("voxel layout: dense, {:.2} MiB of volumes and lists", mib(self.bytes))];
+        }
+        let mut lines = vec![format!(
+            "voxel layout: bricks of {BRICK}³, {:.2} MiB of volumes, maps and lists ({:.3} of the dense layout's {:.2} MiB)",
+            mib(self.bytes),
+            self.ratio(),
+            mib(self.dense_bytes)
+        )];
+        lines.extend(self.pools.iter().enumerate().map(|(i, p)| {
+            let what = if i == 0 { "full resolution".to_string() } else { format!("directional level {}", i - 1) };
+            format!(
+                "bricks, {what} ({}³ texels, {}³ per brick): {} resident of {} slots, {} bricks in the grid ({:.2}%); pool {:.2} MiB",
+                p.level_side,
+                p.brick_stride,
+                p.resident,
+                p.capacity,
+                p.grid_bricks,
+                100.0 * p.resident as f64 / p.grid_bricks.max(1) as f64,
+                mib(p.bytes),
+            )
+        }));
+        lines
+    }
+}
+
+impl BrickSnapshot {
+    /// Per pool, with the bytes of each pool's images (`pool_bytes`).
+    pub fn pool_memory(&self, pool_bytes: &[u64]) -> Vec<PoolMemory> {
         self.pools
             .iter()
-            .enumerate()
             .zip(pool_bytes)
-            .map(|((i, p), &bytes)| {
-                let what = if i == 0 { "full resolution".to_string() } else { format!("directional level {}", i - 1) };
-                format!(
-                    "bricks, {what} ({}³ texels, {}³ per brick): {} resident of {} slots, {} bricks in the grid ({:.2}%); pool {:.2} MiB",
-                    p.pool.level_side,
-                    p.pool.stride,
-                    p.resident.len(),
-                    p.pool.capacity,
-                    p.pool.map_entries(),
-                    100.0 * p.resident.len() as f64 / p.pool.map_entries() as f64,
-                    mib(bytes),
-                )
+            .map(|(p, &bytes)| PoolMemory {
+                level_side: p.pool.level_side,
+                brick_stride: p.pool.stride,
+                resident: p.resident.len() as u32,
+                capacity: p.pool.capacity,
+                grid_bricks: p.pool.map_entries(),
+                bytes,
             })
             .collect()
     }

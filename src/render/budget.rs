@@ -106,7 +106,11 @@ impl Estimate {
         let gi = &scene.settings.gi;
         let lpv = gi.uses_lpv() && matches!(scene.settings.view, View::Final | View::Indirect | View::Ao);
         let res = if lpv { gi.lpv_resolution } else { gi.voxel_resolution };
-        let volumes = if lpv { "propagation volumes" } else { "voxel volumes" };
+        let volumes = match (lpv, gi.voxel_layout) {
+            (true, _) => "propagation volumes",
+            (false, VoxelLayout::Bricks) => "voxel volumes in bricks of 8^3",
+            (false, VoxelLayout::Dense) => "voxel volumes, dense",
+        };
         let rsm = if gi.uses_rsm() { format!(", gi.rsm_size ({} now)", gi.rsm_size) } else { String::new() };
         let lower = if lpv {
             format!("; lower gi.lpv_resolution ({res} now){rsm} or the image size")
@@ -115,7 +119,8 @@ impl Estimate {
             while fits > 8 && self.with_resolution(scene, fits) > info.heap {
                 fits /= 2;
             }
-            format!("; lower gi.voxel_resolution ({res} now, {fits} fits), gi.bounces or the image size")
+            let bricks = self.bricks_instead(scene);
+            format!("{bricks}; lower gi.voxel_resolution ({res} now, {fits} fits), gi.bounces or the image size")
         } else {
             format!("; lower the image size{rsm} or render.shadow_map_size")
         };
@@ -144,6 +149,23 @@ impl Estimate {
             )));
         }
         Ok(())
+    }
+
+    /// With dense voxel volumes, what the bricked layout would need instead (for the advice in
+    /// `check`; empty otherwise).
+    fn bricks_instead(&self, scene: &Scene) -> String {
+        if scene.settings.gi.voxel_layout != VoxelLayout::Dense {
+            return String::new();
+        }
+        let mut s = scene.clone();
+        s.settings.gi.voxel_layout = VoxelLayout::Bricks;
+        let volumes = Estimate::of(&s).volumes;
+        format!(
+            "; set gi.voxel_layout = \"bricks\" (volumes {} instead of {}, about {} in all)",
+            mib(volumes),
+            mib(self.volumes),
+            mib(self.total() - self.volumes + volumes)
+        )
     }
 
     /// The total with another voxel resolution (for the advice in `check`).
@@ -256,9 +278,15 @@ mod tests {
         let lim = |heap, max_allocation| Limits { device: "llvmpipe", heap, max_allocation };
         let e = Estimate::of(&scene);
         let err = e.check_limits(&scene, &lim(2 << 30, 2 << 30)).unwrap_err().to_string();
-        for part in
-            ["test:", "about 4974 MiB", "512^3", "llvmpipe's largest device-local memory heap (2048 MiB)", "256 fits"]
-        {
+        for part in [
+            "test:",
+            "about 4974 MiB",
+            "voxel volumes, dense",
+            "512^3",
+            "llvmpipe's largest device-local memory heap (2048 MiB)",
+            "set gi.voxel_layout = \"bricks\"",
+            "256 fits",
+        ] {
             assert!(err.contains(part), "{part:?} missing from: {err}");
         }
         let err = e.check_limits(&scene, &lim(64 << 30, 512 << 20)).unwrap_err().to_string();

@@ -13,7 +13,7 @@ use super::passes::shadow::ShadowPass;
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::upload::UploadPass;
 use super::passes::voxel_bounce::{BounceComposePass, VoxelBouncePass};
-use super::passes::voxel_bricks::BrickAllocPass;
+use super::passes::voxel_bricks::{BrickAllocPass, BrickClearPass, BrickReleasePass};
 use super::passes::voxel_clear::{DynamicClearPass, VoxelClearPass};
 use super::passes::voxel_light::VoxelLightPass;
 use super::passes::voxel_list::{ListKeeper, ListStep, VoxelListPass};
@@ -57,10 +57,13 @@ pub struct DynamicPasses {
 }
 
 /// Making bricks resident before a voxelization: the marking run over the same geometry, then
-/// the allocation of the marked bricks.
+/// the allocation of the marked bricks. Before a dynamic one, the dynamic bricks of the last
+/// update are released first, and after the allocation their slots are emptied.
 pub struct BrickPasses {
+    pub release: Option<BrickReleasePass>,
     pub mark: VoxelizePass,
     pub allocate: BrickAllocPass,
+    pub clear: Option<BrickClearPass>,
 }
 
 impl BrickPasses {
@@ -75,13 +78,23 @@ impl BrickPasses {
         else {
             return Ok(None);
         };
-        Ok(Some(BrickPasses { mark, allocate }))
+        let (release, clear) = match dynamic {
+            true => (BrickReleasePass::new(ctx, volumes)?, BrickClearPass::new(ctx, volumes)?),
+            false => (None, None),
+        };
+        Ok(Some(BrickPasses { release, mark, allocate, clear }))
     }
 
     fn push<'a>(this: &'a Option<Self>, passes: &mut Vec<&'a dyn Pass>) {
         if let Some(b) = this {
+            if let Some(r) = &b.release {
+                passes.push(r);
+            }
             passes.push(&b.mark);
             passes.push(&b.allocate);
+            if let Some(c) = &b.clear {
+                passes.push(c);
+            }
         }
     }
 }

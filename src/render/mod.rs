@@ -367,6 +367,27 @@ impl Renderer {
         Ok(Some(bricks::BrickSnapshot::decode(&b.layout, all.bytes())))
     }
 
+    /// What the voxel volumes take: the layout, the bytes allocated against the dense layout's
+    /// estimate, and the resident bricks of every pool (reads the lists back: after a frame,
+    /// never inside one). None without voxels.
+    pub fn voxel_memory(&mut self) -> GpuResult<Option<bricks::VoxelMemory>> {
+        let Some(v) = self.passes.voxels.as_ref().map(|v| v.volumes.clone()) else { return Ok(None) };
+        let images: u64 = v.all().iter().map(|i| i.bytes).sum();
+        let lists = v.list.bytes() + v.bricks.as_ref().map_or(0, |b| b.lists.size);
+        let mut dense_scene = self.scene.clone();
+        dense_scene.settings.gi.voxel_layout = crate::scene::VoxelLayout::Dense;
+        let dense_bytes = budget::Estimate::of(&dense_scene).volumes;
+        let full: u64 = v.full_resolution().iter().map(|i| i.bytes).sum();
+        let pool_bytes: Vec<u64> = std::iter::once(full)
+            .chain(v.bricks.iter().flat_map(|b| b.directional.iter().map(|l| l.iter().map(|i| i.bytes).sum())))
+            .collect();
+        let (layout, pools) = match self.resident_bricks()? {
+            Some(snapshot) => ("bricks", snapshot.pool_memory(&pool_bytes)),
+            None => ("dense", Vec::new()),
+        };
+        Ok(Some(bricks::VoxelMemory { layout: layout.to_string(), bytes: images + lists, dense_bytes, pools }))
+    }
+
     /// The schedule mode of the next frames.
     pub fn mode(&self) -> Mode {
         self.scheduler.mode()

@@ -1,14 +1,67 @@
-//! Brick allocation (compute): after the marking run of voxelization, every pending brick of
-//! each pool gets a slot and joins the pool's list of resident bricks; then each pool's
-//! indirect dispatch over its resident bricks is written (glsl/brick_alloc.comp). Bricks stay
-//! resident once allocated: the pools are sized for everything voxelization can touch
-//! (render::bricks::capacity), so a moving object only ever adds bricks, without a host wait.
+//! Brick residency (compute, glsl/brick_alloc.comp and brick_clear.comp). After the marking run
+//! of voxelization, every pending brick of each pool gets a slot and joins the pool's list of
+//! resident bricks, and each pool's indirect dispatches are written. Static bricks keep their
+//! slots; before each dynamic revoxelization the dynamic bricks are released (they read as
+//! empty unless the marking run claims them again), the allocation hands their slots out anew
+//! and the slots are emptied, so the resident set follows moving objects without a host wait.
+//! The pools are sized for the static bricks plus what the moving objects can touch at once
+//! (render::bricks::capacity).
 
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Pipeline};
 use crate::render::graph::{Pass, Use};
 use crate::render::voxel::VoxelVolumes;
 use ash::vk;
 use std::sync::Arc;
+
+/// The modes of glsl/brick_alloc.comp.
+#[derive(Clone, Copy)]
+enum Mode {
+    Allocate = 0,
+    Finalize = 1,
+    Release = 2,
+    Restart = 3,
+}
+
+/// A brick_alloc.comp pipeline for `pool` in `mode` (`after_static`: the finalize step after
+/// the static voxelization, which records the static bricks).
+fn alloc_pipeline(
+    ctx: &Arc<Context>,
+    set: &DescriptorSet,
+    pool: u32,
+    mode: Mode,
+    after_static: bool,
+) -> GpuResult<Pipeline> {
+    let name = match mode {
+        Mode::Allocate => format!("voxel brick allocation {pool}"),
+        Mode::Finalize => "voxel brick lists".to_string(),
+        Mode::Release => format!("voxel brick release {pool}"),
+        Mode::Restart => "voxel brick restart".to_string(),
+    };
+    let spec = [(0, pool), (1, mode as u32), (2, u32::from(after_static))];
+    Pipeline::compute(ctx, &name, shaders::BRICK_ALLOC_COMP, &[set.layout], 0, &spec)
+}
+
+/// The grid, the maps and the lists (brick_alloc.comp's bindings).
+fn alloc_set(ctx: &Arc<Context>, volumes: &VoxelVolumes, name: &str) -> GpuResult<DescriptorSet> {
+    let bricks = volumes.bricks.as_ref().expect("bricks");
+    let binds = [Bind::Uniform(&volumes.grid_buffer), volumes.brick_maps_bind(), Bind::Storage(&bricks.lists)];
+    DescriptorSet::new(ctx, name, vk::ShaderStageFlags::COMPUTE, &binds)
+}
+
+fn map_and_list_uses(volumes: &VoxelVolumes) -> Vec<Use<'_>> {
+    let mut uses = volumes.brick_map_uses(Access::ComputeShaderWrite);
+    uses.extend(volumes.bricks.iter().map(|b| Use::buffer(&b.lists, Access::ComputeShaderWrite)));
+    uses
+}
+
+/// Per pool, the map's bricks one invocation each.
+fn dispatch_per_map_entry(volumes: &VoxelVolumes, pipelines: &[Pipeline], set: &DescriptorSet, cmd: vk::CommandBuffer) {
+    let b = volumes.bricks.as_ref().expect("bricks");
+    for (pipeline, pool) in pipelines.iter().zip(&b.layout.pools) {
+        pipeline.bind(cmd, &[set.set]);
+        pipeline.dispatch(cmd, [pool.map_side; 3], [4; 3]);
+    }
+}
 
 pub struct BrickAllocPass {
     volumes: Arc<VoxelVolumes>,
@@ -23,27 +76,11 @@ impl BrickAllocPass {
     /// None with dense volumes. `dynamic` names the pass after the voxelization it follows.
     pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>, dynamic: bool) -> GpuResult<Option<Self>> {
         let Some(bricks) = &volumes.bricks else { return Ok(None) };
-        let set = DescriptorSet::new(
-            ctx,
-            "voxel brick allocation",
-            vk::ShaderStageFlags::COMPUTE,
-            &[Bind::Uniform(&volumes.grid_buffer), volumes.brick_maps_bind(), Bind::Storage(&bricks.lists)],
-        )?;
-        let pipeline = |pool: u32, finalize: bool| {
-            let name =
-                if finalize { "voxel brick lists".to_string() } else { format!("voxel brick allocation {pool}") };
-            Pipeline::compute(
-                ctx,
-                &name,
-                shaders::BRICK_ALLOC_COMP,
-                &[set.layout],
-                0,
-                &[(0, pool), (1, u32::from(finalize))],
-            )
-        };
-        let allocate =
-            (0..bricks.layout.pools.len() as u32).map(|p| pipeline(p, false)).collect::<GpuResult<Vec<_>>>()?;
-        let finalize = pipeline(0, true)?;
+        let set = alloc_set(ctx, volumes, "voxel brick allocation")?;
+        let allocate = (0..bricks.layout.pools.len() as u32)
+            .map(|p| alloc_pipeline(ctx, &set, p, Mode::Allocate, false))
+            .collect::<GpuResult<Vec<_>>>()?;
+        let finalize = alloc_pipeline(ctx, &set, 0, Mode::Finalize, !dynamic)?;
         let name = if dynamic { "allocate bricks dynamic" } else { "allocate bricks static" };
         Ok(Some(BrickAllocPass { volumes: volumes.clone(), allocate, finalize, set, name }))
     }
@@ -54,19 +91,119 @@ impl Pass for BrickAllocPass {
         self.name
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        let v = &self.volumes;
-        let mut uses = v.brick_map_uses(Access::ComputeShaderWrite);
-        uses.extend(v.bricks.iter().map(|b| Use::buffer(&b.lists, Access::ComputeShaderWrite)));
-        uses
+        map_and_list_uses(&self.volumes)
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
-        let b = self.volumes.bricks.as_ref().expect("a brick allocation has bricks");
-        for (pipeline, pool) in self.allocate.iter().zip(&b.layout.pools) {
-            pipeline.bind(cmd, &[self.set.set]);
-            pipeline.dispatch(cmd, [pool.map_side; 3], [4; 3]);
-        }
+        dispatch_per_map_entry(&self.volumes, &self.allocate, &self.set, cmd);
         super::memory_barrier(ctx, cmd, &[Access::ComputeShaderWrite], &[Access::ComputeShaderWrite]);
         self.finalize.bind(cmd, &[self.set.set]);
         self.finalize.dispatch(cmd, [1; 3], [4; 3]);
+    }
+}
+
+/// Before the dynamic objects are marked again: their bricks leave the maps and every pool's
+/// list ends at its static bricks.
+pub struct BrickReleasePass {
+    volumes: Arc<VoxelVolumes>,
+    release: Vec<Pipeline>,
+    restart: Pipeline,
+    set: DescriptorSet,
+}
+
+impl BrickReleasePass {
+    /// None with dense volumes.
+    pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>) -> GpuResult<Option<Self>> {
+        let Some(bricks) = &volumes.bricks else { return Ok(None) };
+        let set = alloc_set(ctx, volumes, "voxel brick release")?;
+        let release = (0..bricks.layout.pools.len() as u32)
+            .map(|p| alloc_pipeline(ctx, &set, p, Mode::Release, false))
+            .collect::<GpuResult<Vec<_>>>()?;
+        let restart = alloc_pipeline(ctx, &set, 0, Mode::Restart, false)?;
+        Ok(Some(BrickReleasePass { volumes: volumes.clone(), release, restart, set }))
+    }
+}
+
+impl Pass for BrickReleasePass {
+    fn name(&self) -> &str {
+        "release bricks dynamic"
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        map_and_list_uses(&self.volumes)
+    }
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        dispatch_per_map_entry(&self.volumes, &self.release, &self.set, cmd);
+        super::memory_barrier(ctx, cmd, &[Access::ComputeShaderWrite], &[Access::ComputeShaderWrite]);
+        self.restart.bind(cmd, &[self.set.set]);
+        self.restart.dispatch(cmd, [1; 3], [4; 3]);
+    }
+}
+
+/// After the dynamic allocation: the dynamic bricks' slots emptied in every volume of their
+/// pool (a slot may last have held another brick), before the dynamic voxelization fills them.
+pub struct BrickClearPass {
+    volumes: Arc<VoxelVolumes>,
+    /// Per pool: the pipeline and its set (pool 0 binds the full-resolution volumes, pool p
+    /// the six directional volumes of its level).
+    clears: Vec<(Pipeline, DescriptorSet)>,
+}
+
+impl BrickClearPass {
+    /// None with dense volumes.
+    pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>) -> GpuResult<Option<Self>> {
+        let Some(bricks) = &volumes.bricks else { return Ok(None) };
+        let v = volumes;
+        let words = [&v.albedo, &v.normal, v.emission_or_albedo()].map(|i| i.view).to_vec();
+        // The radiance, then the bounced radiance and the bounce scratch where they exist.
+        let radiance = [0, 1].map(|k| v.bounced.get(k).unwrap_or(&v.radiance).view);
+        let radiance = std::iter::once(v.radiance.view).chain(radiance).collect::<Vec<_>>();
+        let clears = (0..bricks.layout.pools.len())
+            .map(|p| {
+                let faces = (0..6)
+                    .map(|f| p.checked_sub(1).map_or(v.pool_placeholder.view, |l| bricks.directional[l][f].view))
+                    .collect();
+                let binds = [
+                    Bind::Uniform(&v.grid_buffer),
+                    v.brick_maps_bind(),
+                    Bind::Storage(&bricks.lists),
+                    Bind::StorageImageArray(words.clone()),
+                    Bind::StorageImageArray(radiance.clone()),
+                    Bind::StorageImageArray(faces),
+                ];
+                let set = DescriptorSet::new(ctx, "voxel brick clear", vk::ShaderStageFlags::COMPUTE, &binds)?;
+                let name = format!("voxel brick clear {p}");
+                let pipeline =
+                    Pipeline::compute(ctx, &name, shaders::BRICK_CLEAR_COMP, &[set.layout], 0, &[(0, p as u32)])?;
+                Ok((pipeline, set))
+            })
+            .collect::<GpuResult<Vec<_>>>()?;
+        Ok(Some(BrickClearPass { volumes: volumes.clone(), clears }))
+    }
+}
+
+impl Pass for BrickClearPass {
+    fn name(&self) -> &str {
+        "clear bricks dynamic"
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        let v = &self.volumes;
+        let b = v.bricks.as_ref().expect("bricks");
+        let mut uses = v.brick_map_uses(Access::ComputeShaderReadStorage);
+        uses.push(Use::buffer(&b.lists, Access::IndirectCommandRead));
+        uses.push(Use::buffer(&b.lists, Access::ComputeShaderReadBuffer));
+        let mut images = vec![&v.albedo, &v.normal];
+        images.extend(v.emission.iter());
+        images.push(&v.radiance);
+        images.extend(v.bounced.iter());
+        images.extend(b.directional.iter().flatten());
+        images.push(&v.pool_placeholder);
+        uses.extend(images.into_iter().map(|i| Use::image(i, Access::ComputeShaderWrite)));
+        uses
+    }
+    fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
+        let lists = &self.volumes.bricks.as_ref().expect("bricks").lists;
+        for (p, (pipeline, set)) in self.clears.iter().enumerate() {
+            pipeline.bind(cmd, &[set.set]);
+            pipeline.dispatch_indirect(cmd, lists, crate::render::bricks::list_header::dynamic_range(p));
+        }
     }
 }
