@@ -34,6 +34,8 @@ fn bench_smoke_writes_schema_valid_json_and_a_timeline() {
             "32",
             "--set",
             "gi.voxel_resolution=16",
+            "--set",
+            "gi.voxel_layout=\"bricks\"",
             "--serial-profile",
             "--error-frames",
             "2",
@@ -76,8 +78,7 @@ fn bench_smoke_writes_schema_valid_json_and_a_timeline() {
             if scenario == "static" {
                 assert_eq!(Some(o), typed.modes[0].occupancy, "{}", m.mode);
             }
-            // The default bricked layout: resident full-resolution bricks are the occupied 8^3
-            // bricks, in less memory than the dense layout's estimate.
+            // The bricked layout: resident full-resolution bricks are the occupied 8^3 bricks.
             let v = m.voxel_memory.as_ref().expect("the voxel layout");
             assert_eq!(v.layout, "bricks", "{v:?}");
             assert_eq!(u64::from(v.pools[0].resident), o.bricks8, "{v:?}");

@@ -7,7 +7,7 @@ mod common;
 
 use common::*;
 use dvsgi::gpu::{Buffer, GpuError};
-use dvsgi::render::budget::Estimate;
+use dvsgi::render::budget::{Estimate, Limits};
 use dvsgi::render::Renderer;
 use gpu_allocator::MemoryLocation;
 use std::process::{Command, Stdio};
@@ -25,8 +25,12 @@ fn cornell(overrides: &[(&str, &str)]) -> dvsgi::scene::Scene {
 fn memory_estimate_matches_what_is_allocated() {
     let ctx = context();
     for (label, o) in [
-        ("cornell 64^3", vec![("gi.voxel_resolution", "64")]),
-        ("cornell 256^3, bricks pooling the directional level 0", vec![("gi.voxel_resolution", "256")]),
+        ("cornell 64^3, auto", vec![("gi.voxel_resolution", "64")]),
+        ("cornell 64^3 bricks", vec![("gi.voxel_resolution", "64"), ("gi.voxel_layout", "\"bricks\"")]),
+        (
+            "cornell 256^3, bricks pooling the directional level 0",
+            vec![("gi.voxel_resolution", "256"), ("gi.voxel_layout", "\"bricks\"")],
+        ),
         ("cornell 64^3 dense", vec![("gi.voxel_resolution", "64"), ("gi.voxel_layout", "\"dense\"")]),
         ("glossy, 2 bounces, cone shadows, 1/2 res", vec![("gi.voxel_resolution", "64"), ("gi.bounces", "2")]),
         ("rsm, 6 faces of 256^2, 1/2 res", vec![("gi.mode", "\"rsm\""), ("gi.downsample", "2")]),
@@ -46,6 +50,8 @@ fn memory_estimate_matches_what_is_allocated() {
                 ],
             );
         }
+        // "auto" as the renderer resolves it on this device.
+        scene.settings.gi.voxel_layout = dvsgi::render::budget::resolve_layout(&scene, &Limits::of(&ctx));
         let est = Estimate::of(&scene).total() as f64;
         let before = ctx.allocated_bytes();
         let r = Renderer::new(&ctx, scene).unwrap();

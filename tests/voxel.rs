@@ -237,6 +237,7 @@ fn dynamic_update_clears_old_voxels_and_keeps_static_ones() {
     ]);
     // An emissive blob: its voxels carry radiance wherever it is (and lose it when it leaves).
     s.materials[1].emission = Vec3::new(2.0, 1.0, 0.5);
+    s.settings.gi.voxel_layout = VoxelLayout::Bricks;
     let mut r = Renderer::new(&ctx, s).unwrap();
     assert!(r.pass_names(false).contains(&"voxel clear dynamic".to_string()));
     let flags_img = r.voxels().unwrap().flags.clone().expect("a flag volume for a dynamic scene");
@@ -244,11 +245,11 @@ fn dynamic_update_clears_old_voxels_and_keeps_static_ones() {
     let a0 = albedo_volume(&mut r);
     let flags: Vec<u8> = r.download_voxels(&flags_img).unwrap();
     let l0 = r.voxel_list().unwrap().unwrap();
-    let bricks0 = r.resident_bricks().unwrap().expect("bricked by default");
+    let bricks0 = r.resident_bricks().unwrap().expect("bricked");
     r.render(1.0, false).unwrap();
     let a1 = albedo_volume(&mut r);
     let l1 = r.voxel_list().unwrap().unwrap();
-    let bricks1 = r.resident_bricks().unwrap().expect("bricked by default");
+    let bricks1 = r.resident_bricks().unwrap().expect("bricked");
     assert!(!r.pass_names(false).contains(&"voxelize static".to_string()), "static geometry is voxelized once");
     check_work_list(&l0, &occupied(&a0, RES), &flags);
     check_work_list(&l1, &occupied(&a1, RES), &flags);
@@ -648,6 +649,7 @@ fn an_empty_grid_dispatches_nothing_and_stays_black() {
     // A triangle far outside the grid [0, 32]^3 (and out of view).
     let outside = [[v(100.0, 100.0, 100.0), v(110.0, 100.0, 100.0), v(100.0, 110.0, 100.0)]];
     let mut s = scene(vec![(mesh("outside", &outside, 0, None), true, Motion::None)]);
+    s.settings.gi.voxel_layout = VoxelLayout::Bricks;
     s.lights.push(Light {
         name: "bulb".into(),
         kind: LightKind::Point { position: Vec3::splat(16.0), intensity: Vec3::splat(50.0) },
@@ -660,7 +662,7 @@ fn an_empty_grid_dispatches_nothing_and_stays_black() {
         r.render(t, true).unwrap();
         let list = r.voxel_list().unwrap().unwrap();
         assert!(list.entries.is_empty() && list.static_count == 0 && list.stale.is_empty());
-        let bricks = r.resident_bricks().unwrap().expect("bricked by default");
+        let bricks = r.resident_bricks().unwrap().expect("bricked");
         assert!(bricks.pools.iter().all(|p| p.resident.is_empty() && p.dropped == 0), "no brick is resident");
         for g in [list.occupied_groups, list.dynamic_groups, list.stale_groups] {
             assert_eq!(g[0] * g[1] * g[2], 0, "no workgroups dispatched: {g:?}");

@@ -672,6 +672,13 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
             Ok(t) => t.lines().for_each(|l| outln!("    {l}")),
             Err(e) => outln!("    (cannot show: {e})"),
         }
+        let mut scene = scene;
+        let layout = dvsgi::render::budget::resolve_layout(&scene, &dvsgi::render::budget::Limits::of(&ctx));
+        if scene.settings.gi.voxel_layout != layout && scene.settings.gi.mode == dvsgi::scene::GiMode::Vct {
+            let name = if layout == dvsgi::scene::VoxelLayout::Dense { "dense" } else { "bricks" };
+            outln!("  gi.voxel_layout \"auto\" on this device: {name} (docs/SPARSE.md)");
+        }
+        scene.settings.gi.voxel_layout = layout;
         let estimate = dvsgi::render::budget::Estimate::of(&scene);
         outln!(
             "  GPU memory estimated before allocating: {:.2} MiB (device-local heap {:.0} MiB)",

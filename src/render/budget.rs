@@ -18,6 +18,13 @@ pub struct Limits<'a> {
     pub max_allocation: u64,
 }
 
+impl Limits<'_> {
+    pub fn of(ctx: &Context) -> Limits<'_> {
+        let i = &ctx.info;
+        Limits { device: &i.name, heap: i.device_local_heap, max_allocation: i.max_allocation }
+    }
+}
+
 /// The large resources of a frame, by group, in bytes.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Estimate {
@@ -94,11 +101,7 @@ impl Estimate {
     /// volume larger than its largest allocation. The message names the limit, the device and
     /// what to lower.
     pub fn check(&self, ctx: &Context, scene: &Scene) -> GpuResult<()> {
-        let i = &ctx.info;
-        self.check_limits(
-            scene,
-            &Limits { device: &i.name, heap: i.device_local_heap, max_allocation: i.max_allocation },
-        )
+        self.check_limits(scene, &Limits::of(ctx))
     }
 
     /// `check` against given limits.
@@ -109,7 +112,7 @@ impl Estimate {
         let volumes = match (lpv, gi.voxel_layout) {
             (true, _) => "propagation volumes",
             (false, VoxelLayout::Bricks) => "voxel volumes in bricks of 8^3",
-            (false, VoxelLayout::Dense) => "voxel volumes, dense",
+            (false, VoxelLayout::Dense | VoxelLayout::Auto) => "voxel volumes, dense",
         };
         let rsm = if gi.uses_rsm() { format!(", gi.rsm_size ({} now)", gi.rsm_size) } else { String::new() };
         let lower = if lpv {
@@ -154,7 +157,7 @@ impl Estimate {
     /// With dense voxel volumes, what the bricked layout would need instead (for the advice in
     /// `check`; empty otherwise).
     fn bricks_instead(&self, scene: &Scene) -> String {
-        if scene.settings.gi.voxel_layout != VoxelLayout::Dense {
+        if scene.settings.gi.voxel_layout == VoxelLayout::Bricks {
             return String::new();
         }
         let mut s = scene.clone();
@@ -174,6 +177,29 @@ impl Estimate {
         s.settings.gi.voxel_resolution = res;
         let e = Estimate::of(&s);
         e.volumes + self.targets + self.shadow_maps + self.scene
+    }
+}
+
+/// `gi.voxel_layout = "auto"` on a device with `limits`: dense when the dense layout's whole
+/// frame takes at most half of the device-local heap and its largest volume fits one
+/// allocation, bricks otherwise. The two render the same image (tests/voxel.rs); dense is the
+/// faster (1.2-1.7x the frame on an H200 for bricks on Sponza at 128^3-512^3, 1.3-1.5x per voxel
+/// pass on lavapipe: docs/SPARSE.md), bricks the smaller (0.15 of dense at 512^3). Half the heap
+/// leaves the rest of the device's memory to everything else running on it. Other values are
+/// returned as they are.
+pub fn resolve_layout(scene: &Scene, limits: &Limits) -> VoxelLayout {
+    if scene.settings.gi.voxel_layout != VoxelLayout::Auto {
+        return scene.settings.gi.voxel_layout;
+    }
+    let mut dense = scene.clone();
+    dense.settings.gi.voxel_layout = VoxelLayout::Dense;
+    let e = Estimate::of(&dense);
+    let fits_heap = limits.heap == 0 || e.total() <= limits.heap / 2;
+    let fits_allocation = limits.max_allocation == 0 || e.largest_volume <= limits.max_allocation;
+    if fits_heap && fits_allocation {
+        VoxelLayout::Dense
+    } else {
+        VoxelLayout::Bricks
     }
 }
 
@@ -298,6 +324,30 @@ mod tests {
         assert!(e.check_limits(&scene, &lim(0, 0)).is_ok(), "unknown limits are not checked");
         scene.settings.gi.voxel_resolution = 256;
         assert!(Estimate::of(&scene).check_limits(&scene, &lim(2 << 30, 2 << 30)).is_ok());
+    }
+
+    /// "auto" is dense where the dense frame takes at most half of the heap and its largest
+    /// volume fits one allocation, bricks elsewhere; a layout named in the scene stays.
+    #[test]
+    fn auto_layout_is_dense_where_it_fits_half_the_heap() {
+        let mut scene = crate::render::test_scene(vec![]);
+        scene.settings.width = 64;
+        scene.settings.height = 64;
+        scene.settings.gi.voxel_resolution = 512;
+        assert_eq!(scene.settings.gi.voxel_layout, VoxelLayout::Auto, "the default");
+        let mut dense = scene.clone();
+        dense.settings.gi.voxel_layout = VoxelLayout::Dense;
+        let e = Estimate::of(&dense);
+        let lim = |heap, max_allocation| Limits { device: "test", heap, max_allocation };
+        assert_eq!(resolve_layout(&scene, &lim(2 * e.total(), 0)), VoxelLayout::Dense);
+        assert_eq!(resolve_layout(&scene, &lim(2 * e.total() - 1, 0)), VoxelLayout::Bricks);
+        assert_eq!(resolve_layout(&scene, &lim(0, e.largest_volume)), VoxelLayout::Dense);
+        assert_eq!(resolve_layout(&scene, &lim(0, e.largest_volume - 1)), VoxelLayout::Bricks);
+        assert_eq!(resolve_layout(&scene, &lim(0, 0)), VoxelLayout::Dense, "unknown limits");
+        scene.settings.gi.voxel_layout = VoxelLayout::Bricks;
+        assert_eq!(resolve_layout(&scene, &lim(u64::MAX, 0)), VoxelLayout::Bricks);
+        scene.settings.gi.voxel_layout = VoxelLayout::Dense;
+        assert_eq!(resolve_layout(&scene, &lim(1, 1)), VoxelLayout::Dense);
     }
 
     /// Reflective shadow maps and propagation volumes count, and a refusal names their keys.

@@ -141,7 +141,8 @@ impl Renderer {
         Renderer::with_options(ctx, scene, RenderOptions::default())
     }
 
-    pub fn with_options(ctx: &Arc<Context>, scene: Scene, options: RenderOptions) -> GpuResult<Renderer> {
+    pub fn with_options(ctx: &Arc<Context>, mut scene: Scene, options: RenderOptions) -> GpuResult<Renderer> {
+        scene.settings.gi.voxel_layout = budget::resolve_layout(&scene, &budget::Limits::of(ctx));
         if options.frames_in_flight == 0 || options.frames_in_flight > 8 {
             return Err(GpuError::Limit(format!("frames in flight must be 1..=8, not {}", options.frames_in_flight)));
         }

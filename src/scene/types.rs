@@ -382,10 +382,13 @@ pub enum VoxelAttenuation {
     NDotL,
 }
 
-/// How the voxel volumes are stored (render::bricks).
+/// How the voxel volumes are stored (render::bricks, docs/SPARSE.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum VoxelLayout {
+    /// Dense where it fits the device comfortably, bricks elsewhere
+    /// (`render::budget::resolve_layout`): both render the same image, and dense is faster.
+    Auto,
     /// N^3 texels per volume.
     Dense,
     /// Only the bricks of 8^3 texels that hold something, in pools found through a map.
@@ -524,7 +527,7 @@ impl Default for GiSettings {
         GiSettings {
             mode: GiMode::Vct,
             voxel_resolution: 128,
-            voxel_layout: VoxelLayout::Bricks,
+            voxel_layout: VoxelLayout::Auto,
             attenuation: VoxelAttenuation::NormalWeighted,
             occlusion: VoxelOcclusion::ShadowMap,
             voxel_shadow_softness: 0.0,
