@@ -5,7 +5,7 @@
 #   tools/gpu-report.sh [--bundle DIR] [--only GROUPS] OUT_DIR
 #
 # GROUPS (comma-separated; default all): info, tests, bench, layouts, techniques, serial, sweep,
-# curves.
+# accuracy, curves.
 # Runs into an existing OUT_DIR add to it (steps.tsv appends), so a report can be split across
 # several shorter sessions on the GPU machine; README.md is rewritten from all of OUT_DIR.
 #
@@ -19,6 +19,8 @@
 #   sweep-cornell/         a short speed/accuracy sweep against the path-traced reference, with
 #                          rows for rsm, lpv and rsm+lpv on the same frontier
 #   serial-*.json/.txt     the serial profile (every pass submitted alone and host-timed)
+#   accuracy-sponza/       Dabrovic's Sponza at 128^3, 256^3 and 512^3, dense and bricks, against a
+#                          4096-spp reference, whole image and by region (compare --scene --ref-direct)
 #   curves/                per-pass cost against voxel resolution, pixels and triangles, with
 #                          fitted exponents (tools/cost-curves.py; curves.md is the table)
 #   steps.tsv, report.log  each step's exit status and seconds; README.md summarises
@@ -50,8 +52,8 @@ if [ $# -ne 1 ]; then
 fi
 for g in ${only//,/ }; do
   case "$g" in
-    info | tests | bench | layouts | techniques | serial | sweep | curves) ;;
-    *) echo "gpu-report: unknown group '$g' (info, tests, bench, layouts, techniques, serial, sweep, curves)" >&2; exit 2 ;;
+    info | tests | bench | layouts | techniques | serial | sweep | accuracy | curves) ;;
+    *) echo "gpu-report: unknown group '$g' (info, tests, bench, layouts, techniques, serial, sweep, accuracy, curves)" >&2; exit 2 ;;
   esac
 done
 # want GROUP: whether this run measures GROUP.
@@ -234,6 +236,31 @@ want sweep && step sweep-cornell 420 "$bin/dvsgi" sweep scenes/cornell-box.toml 
 # The other techniques into the same directory: one frontier with every technique.
 want sweep && step sweep-cornell-rsm-lpv 420 "$bin/dvsgi" sweep scenes/cornell-box.toml --out "$out/sweep-cornell" \
   "${sweep[@]}" --grid mode=rsm,lpv,rsm+lpv >>"$out/sweep-cornell.txt" 2>&1
+
+# ----- 5b. What voxel resolution buys (issue 27): Sponza against the path tracer, by region. -----
+if [ "$quick" = 1 ]; then
+  acc_size=(--width 32 --height 18) acc_spp=16 acc_res=(16 32)
+else
+  acc_size=(--width 480 --height 270) acc_spp=4096 acc_res=(128 256 512)
+fi
+if want accuracy; then
+  a="$out/accuracy-sponza"
+  mkdir -p "$a"
+  step accuracy-reference 300 "$bin/dvsgi" reference scenes/sponza.toml "${acc_size[@]}" --spp "$acc_spp" \
+    --out "$a/reference.exr" >"$a/reference.txt" 2>&1
+  step accuracy-reference-direct 120 "$bin/dvsgi" reference scenes/sponza.toml "${acc_size[@]}" --spp 1024 \
+    --bounces 0 --out "$a/direct.exr" >>"$a/reference.txt" 2>&1
+  for v in "${acc_res[@]}"; do
+    for layout in dense bricks; do
+      tag="v$v-$layout"
+      step "accuracy-$tag" 300 "$bin/dvsgi" render scenes/sponza.toml "${acc_size[@]}" --schedule sync --frames 8 \
+        --set "gi.voxel_resolution=$v" --set "gi.voxel_layout=\"$layout\"" --out "$a/$tag.exr" >"$a/$tag.txt" 2>&1
+      step "accuracy-compare-$tag" 120 "$bin/dvsgi" compare "$a/$tag.exr" "$a/reference.exr" --scene scenes/sponza.toml \
+        --ref-direct "$a/direct.exr" --json "$a/$tag.json" >>"$a/$tag.txt" 2>&1
+      rm -f "$a/$tag.exr"
+    done
+  done
+fi
 
 # ----- 6. Cost curves: per-pass cost against voxel resolution, pixels and triangles. -----
 if [ "$quick" = 1 ]; then
