@@ -52,7 +52,7 @@ fn memory_estimate_matches_what_is_allocated() {
         }
         // "auto" as the renderer resolves it on this device.
         scene.settings.gi.voxel_layout = dvsgi::render::budget::resolve_layout(&scene, &Limits::of(&ctx));
-        let est = Estimate::of(&scene).total() as f64;
+        let est = Estimate::on(&ctx, &scene).total() as f64;
         let before = ctx.allocated_bytes();
         let r = Renderer::new(&ctx, scene).unwrap();
         let got = (ctx.allocated_bytes() - before) as f64;

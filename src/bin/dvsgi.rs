@@ -679,7 +679,7 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
             outln!("  gi.voxel_layout \"auto\" on this device: {name} (docs/SPARSE.md)");
         }
         scene.settings.gi.voxel_layout = layout;
-        let estimate = dvsgi::render::budget::Estimate::of(&scene);
+        let estimate = dvsgi::render::budget::Estimate::on(&ctx, &scene);
         outln!(
             "  GPU memory estimated before allocating: {:.2} MiB (device-local heap {:.0} MiB)",
             estimate.total() as f64 / (1024.0 * 1024.0),

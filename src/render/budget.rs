@@ -8,6 +8,7 @@ use crate::render::bricks::{self, BrickLayout};
 use crate::render::frame::cone_shadows;
 use crate::render::voxel::{list_capacity, VoxelGrid, VoxelNeeds};
 use crate::scene::{GiMode, Scene, View, VoxelLayout};
+use ash::vk;
 
 /// What a device offers (`DeviceInfo`'s memory figures).
 pub struct Limits<'a> {
@@ -43,7 +44,18 @@ pub struct Estimate {
 }
 
 impl Estimate {
+    /// By texel counts: what any device needs at least (for advice and tables).
     pub fn of(scene: &Scene) -> Estimate {
+        Estimate::sized(scene, &Alloc::texel_bytes)
+    }
+
+    /// On `ctx`'s device: the voxel volumes by the device's own memory requirements (its
+    /// padding and alignment included), the rest by texel counts.
+    pub fn on(ctx: &Context, scene: &Scene) -> Estimate {
+        Estimate::sized(scene, &|a: &Alloc| a.device_bytes(ctx))
+    }
+
+    fn sized(scene: &Scene, bytes: &dyn Fn(&Alloc) -> u64) -> Estimate {
         let s = &scene.settings;
         let shadow_views = crate::render::frame::shadow_map_views(scene);
         let mut e = Estimate::default();
@@ -74,7 +86,7 @@ impl Estimate {
             }
         }
         if s.gi.mode == GiMode::Vct || voxel_view {
-            let vols = voxel_allocations(scene);
+            let vols: Vec<u64> = voxel_allocations(scene).iter().map(bytes).collect();
             if VoxelNeeds::of(scene).cones && !voxel_view {
                 let specular = s.gi.specular && scene.materials.iter().any(|m| m.is_glossy());
                 let per_px = 8 + if specular { 8 } else { 0 } + if cone_shadows(scene) { 4 } else { 0 };
@@ -212,49 +224,110 @@ fn mib(bytes: u64) -> String {
     }
 }
 
-/// Bytes of each allocation of the voxel volumes (`VoxelVolumes::new`): the full-resolution
-/// volumes (N^3, or pools of bricks), the maps, lists and pooled directional levels of the
-/// bricked layout, the work lists, and the dense directional mip chains.
-fn voxel_allocations(scene: &Scene) -> Vec<u64> {
+/// One allocation of the voxel volumes: a buffer of so many bytes, or a 3D image (format,
+/// extent, mip levels, whether it is sampled), whose bytes a device may pad beyond its texels.
+#[derive(Debug, Clone, Copy)]
+enum Alloc {
+    Buffer(u64),
+    Volume { format: vk::Format, extent: [u32; 3], mips: u32, sampled: bool },
+}
+
+impl Alloc {
+    fn volume(format: vk::Format, extent: [u32; 3], mips: u32, sampled: bool) -> Alloc {
+        Alloc::Volume { format, extent, mips, sampled }
+    }
+
+    /// Bytes by the texel count: what any device needs at least.
+    fn texel_bytes(&self) -> u64 {
+        match *self {
+            Alloc::Buffer(bytes) => bytes,
+            Alloc::Volume { format, extent, mips, .. } => {
+                let level = |l: u32| extent.iter().map(|&e| u64::from((e >> l).max(1))).product::<u64>();
+                (0..mips).map(level).sum::<u64>() * crate::render::passes::readback::bytes_per_texel(format)
+            }
+        }
+    }
+
+    /// Bytes on `ctx`'s device: an image's memory requirements as the device states them
+    /// (vkGetDeviceImageMemoryRequirements, maintenance4: no image is created), so padding
+    /// and alignment count (NVIDIA pads 3D images: 9% over the texels for the brick pools).
+    fn device_bytes(&self, ctx: &Context) -> u64 {
+        let Alloc::Volume { format, extent, mips, sampled } = *self else { return self.texel_bytes() };
+        let mut usage =
+            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC;
+        if sampled {
+            usage |= vk::ImageUsageFlags::SAMPLED;
+        }
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_3D)
+            .format(format)
+            .extent(vk::Extent3D { width: extent[0], height: extent[1], depth: extent[2] })
+            .mip_levels(mips)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        let query = vk::DeviceImageMemoryRequirements::default().create_info(&info);
+        let mut req = vk::MemoryRequirements2::default();
+        unsafe { ctx.device.get_device_image_memory_requirements(&query, &mut req) };
+        req.memory_requirements.size.max(self.texel_bytes())
+    }
+}
+
+/// Each allocation of the voxel volumes (`VoxelVolumes::new`): the full-resolution volumes
+/// (N^3, or pools of bricks), the maps, lists and pooled directional levels of the bricked
+/// layout, the work lists, the dense directional mip chains and the placeholders.
+fn voxel_allocations(scene: &Scene) -> Vec<Alloc> {
+    use vk::Format as F;
     let s = &scene.settings;
     let needs = VoxelNeeds::of(scene);
-    let res = s.gi.voxel_resolution as u64;
+    let res = s.gi.voxel_resolution;
     let grid = VoxelGrid::for_scene(scene);
     let layout = (s.gi.voxel_layout == VoxelLayout::Bricks).then(|| BrickLayout::for_scene(scene, &grid, needs.cones));
-    // Texels of each full-resolution volume: N^3, or its pool of bricks.
-    let n = layout.as_ref().map_or(res * res * res, |l| l.pools[0].texels());
-    let mut vols = vec![4 * n, 4 * n, 8 * n]; // albedo, normal (R32_UINT), radiance (RGBA16F)
+    // Each full-resolution volume: N^3, or its pool of bricks.
+    let full = layout.as_ref().map_or([res; 3], |l| l.pools[0].extent());
+    let volume = |format, sampled| Alloc::volume(format, full, 1, sampled);
+    let rgba16 = F::R16G16B16A16_SFLOAT;
+    let mut vols = vec![volume(F::R32_UINT, false), volume(F::R32_UINT, false), volume(rgba16, true)];
     if needs.emission {
-        vols.push(4 * n);
+        vols.push(volume(F::R32_UINT, false));
     }
     if needs.dynamic {
-        vols.push(n);
+        vols.push(volume(F::R8_UINT, false));
     }
     if needs.bounces > 0 {
-        vols.extend([8 * n, 8 * n]); // bounced radiance and the bounce's scratch volume
+        vols.extend([volume(rgba16, true), volume(rgba16, true)]); // bounced radiance, the bounce's scratch
     }
     let pooled = layout.as_ref().map_or(0, |l| l.pools.len() as u32 - 1);
     if let Some(l) = &layout {
         // The maps (R32_UINT per brick), the resident-brick lists, and the pooled
         // directional levels (six RGBA16F volumes each).
-        vols.extend(l.pools.iter().map(|p| 4 * p.map_entries()));
-        vols.push(bricks::list_header::SIZE + 4 * l.pools.iter().map(|p| u64::from(p.capacity)).sum::<u64>());
+        vols.extend(l.pools.iter().map(|p| Alloc::volume(F::R32_UINT, [p.map_side; 3], 1, false)));
+        let lists = bricks::list_header::SIZE + 4 * l.pools.iter().map(|p| u64::from(p.capacity)).sum::<u64>();
+        vols.push(Alloc::Buffer(lists));
         if needs.cones {
-            vols.extend(l.pools[1..].iter().flat_map(|p| [8 * p.texels(); 6]));
+            vols.extend(l.pools[1..].iter().flat_map(|p| [Alloc::volume(rgba16, p.extent(), 1, true); 6]));
         }
     }
     // The work list of occupied voxels (a 64-byte header and 4 bytes per voxel the
     // triangles can occupy), and with dynamic objects the stale list.
     let capacity = list_capacity(scene, &grid);
-    vols.push(64 + 4 * capacity);
+    vols.push(Alloc::Buffer(64 + 4 * capacity));
     if needs.dynamic {
-        vols.push(4 * capacity.max(1));
+        vols.push(Alloc::Buffer(4 * capacity.max(1)));
     }
     if needs.cones {
         // Six RGBA16F volumes at half resolution with full mip chains (the levels that are
         // not pooled).
-        let chain: u64 = (pooled..s.gi.voxel_resolution.trailing_zeros()).map(|l| ((res / 2) >> l).pow(3) * 8).sum();
-        vols.extend([chain; 6]);
+        let side = (res / 2) >> pooled;
+        vols.extend([Alloc::volume(rgba16, [side; 3], res.trailing_zeros() - pooled, true); 6]);
+    }
+    // The 1x1x1 placeholders bound where a volume does not exist.
+    vols.extend([Alloc::volume(F::R32_UINT, [1; 3], 1, false), Alloc::volume(rgba16, [1; 3], 1, true)]);
+    if !needs.dynamic {
+        vols.push(Alloc::volume(F::R8_UINT, [1; 3], 1, false));
     }
     vols
 }
@@ -274,8 +347,9 @@ mod tests {
         let e = Estimate::of(&scene);
         // albedo + normal 2 x 2048, radiance 4096, bounced radiance and the bounce's scratch
         // volume 2 x 4096, six directional chains of (64 + 8 + 1) texels x 8 bytes, and the
-        // work list's 64-byte header (no triangles: no entries).
-        assert_eq!(e.volumes, 2 * 2048 + 4096 + 2 * 4096 + 6 * 73 * 8 + 64);
+        // work list's 64-byte header (no triangles: no entries), and the three 1^3
+        // placeholders (R32_UINT, RGBA16F, R8_UINT).
+        assert_eq!(e.volumes, 2 * 2048 + 4096 + 2 * 4096 + 6 * 73 * 8 + 64 + 4 + 8 + 1);
         assert_eq!(e.largest_volume, 4096);
         assert_eq!(e.targets, 100 * 48 + 100 * 8, "G-buffer, radiance, display, diffuse cones");
         scene.settings.gi.mode = GiMode::None;

@@ -164,7 +164,7 @@ impl Renderer {
         let shadow_views = lights::shadow_view_count(&scene);
         let map_views = frame::shadow_map_views(&scene);
         // Refuse what cannot fit before allocating anything.
-        budget::Estimate::of(&scene).check(ctx, &scene)?;
+        budget::Estimate::on(ctx, &scene).check(ctx, &scene)?;
         let scene_gpu = Arc::new(SceneGpu::new(ctx, &scene)?);
         let frame_buffers = FrameBuffers {
             uniforms: Buffer::new(
