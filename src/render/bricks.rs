@@ -366,7 +366,8 @@ pub struct VoxelMemory {
     /// Bytes allocated for the voxel volumes, the brick maps and pools, and the voxel and
     /// brick lists (what the budget's estimate counts as volumes).
     pub bytes: u64,
-    /// The budget's estimate of the same volumes in the dense layout at this resolution.
+    /// The budget's estimate of the same volumes in the dense layout at this resolution, on
+    /// this device (`Estimate::on`).
     pub dense_bytes: u64,
     /// One entry per pool: full resolution first, then the pooled directional levels (none
     /// in the dense layout).
