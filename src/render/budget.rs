@@ -46,16 +46,26 @@ pub struct Estimate {
 impl Estimate {
     /// By texel counts: what any device needs at least (for advice and tables).
     pub fn of(scene: &Scene) -> Estimate {
-        Estimate::sized(scene, &Alloc::texel_bytes)
+        Estimate::of_layout(scene, scene.settings.gi.voxel_layout)
+    }
+
+    /// `of` with the voxel volumes in `layout` (without copying the scene).
+    pub fn of_layout(scene: &Scene, layout: VoxelLayout) -> Estimate {
+        Estimate::sized(scene, layout, &Alloc::texel_bytes)
     }
 
     /// On `ctx`'s device: the voxel volumes by the device's own memory requirements (its
     /// padding and alignment included), the rest by texel counts.
     pub fn on(ctx: &Context, scene: &Scene) -> Estimate {
-        Estimate::sized(scene, &|a: &Alloc| a.device_bytes(ctx))
+        Estimate::on_layout(ctx, scene, scene.settings.gi.voxel_layout)
     }
 
-    fn sized(scene: &Scene, bytes: &dyn Fn(&Alloc) -> u64) -> Estimate {
+    /// `on` with the voxel volumes in `layout`.
+    pub fn on_layout(ctx: &Context, scene: &Scene, layout: VoxelLayout) -> Estimate {
+        Estimate::sized(scene, layout, &|a: &Alloc| a.device_bytes(ctx))
+    }
+
+    fn sized(scene: &Scene, layout: VoxelLayout, bytes: &dyn Fn(&Alloc) -> u64) -> Estimate {
         let s = &scene.settings;
         let shadow_views = crate::render::frame::shadow_map_views(scene);
         let mut e = Estimate::default();
@@ -86,7 +96,7 @@ impl Estimate {
             }
         }
         if s.gi.mode == GiMode::Vct || voxel_view {
-            let vols: Vec<u64> = voxel_allocations(scene).iter().map(bytes).collect();
+            let vols: Vec<u64> = voxel_allocations(scene, layout).iter().map(bytes).collect();
             if VoxelNeeds::of(scene).cones && !voxel_view {
                 let specular = s.gi.specular && scene.materials.iter().any(|m| m.is_glossy());
                 let per_px = 8 + if specular { 8 } else { 0 } + if cone_shadows(scene) { 4 } else { 0 };
@@ -172,9 +182,7 @@ impl Estimate {
         if scene.settings.gi.voxel_layout == VoxelLayout::Bricks {
             return String::new();
         }
-        let mut s = scene.clone();
-        s.settings.gi.voxel_layout = VoxelLayout::Bricks;
-        let volumes = Estimate::of(&s).volumes;
+        let volumes = Estimate::of_layout(scene, VoxelLayout::Bricks).volumes;
         format!(
             "; set gi.voxel_layout = \"bricks\" (volumes {} instead of {}, about {} in all)",
             mib(volumes),
@@ -203,9 +211,7 @@ pub fn resolve_layout(scene: &Scene, limits: &Limits) -> VoxelLayout {
     if scene.settings.gi.voxel_layout != VoxelLayout::Auto {
         return scene.settings.gi.voxel_layout;
     }
-    let mut dense = scene.clone();
-    dense.settings.gi.voxel_layout = VoxelLayout::Dense;
-    let e = Estimate::of(&dense);
+    let e = Estimate::of_layout(scene, VoxelLayout::Dense);
     let fits_heap = limits.heap == 0 || e.total() <= limits.heap / 2;
     let fits_allocation = limits.max_allocation == 0 || e.largest_volume <= limits.max_allocation;
     if fits_heap && fits_allocation {
@@ -279,13 +285,13 @@ impl Alloc {
 /// Each allocation of the voxel volumes (`VoxelVolumes::new`): the full-resolution volumes
 /// (N^3, or pools of bricks), the maps, lists and pooled directional levels of the bricked
 /// layout, the work lists, the dense directional mip chains and the placeholders.
-fn voxel_allocations(scene: &Scene) -> Vec<Alloc> {
+fn voxel_allocations(scene: &Scene, layout: VoxelLayout) -> Vec<Alloc> {
     use vk::Format as F;
     let s = &scene.settings;
     let needs = VoxelNeeds::of(scene);
     let res = s.gi.voxel_resolution;
     let grid = VoxelGrid::for_scene(scene);
-    let layout = (s.gi.voxel_layout == VoxelLayout::Bricks).then(|| BrickLayout::for_scene(scene, &grid, needs.cones));
+    let layout = (layout == VoxelLayout::Bricks).then(|| BrickLayout::for_scene(scene, &grid, needs.cones));
     // Each full-resolution volume: N^3, or its pool of bricks.
     let full = layout.as_ref().map_or([res; 3], |l| l.pools[0].extent());
     let volume = |format, sampled| Alloc::volume(format, full, 1, sampled);

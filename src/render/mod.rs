@@ -375,9 +375,7 @@ impl Renderer {
         let Some(v) = self.passes.voxels.as_ref().map(|v| v.volumes.clone()) else { return Ok(None) };
         let images: u64 = v.all().iter().map(|i| i.bytes).sum();
         let lists = v.list.bytes() + v.bricks.as_ref().map_or(0, |b| b.lists.size);
-        let mut dense_scene = self.scene.clone();
-        dense_scene.settings.gi.voxel_layout = crate::scene::VoxelLayout::Dense;
-        let dense_bytes = budget::Estimate::on(&self.ctx, &dense_scene).volumes;
+        let dense_bytes = budget::Estimate::on_layout(&self.ctx, &self.scene, crate::scene::VoxelLayout::Dense).volumes;
         let full: u64 = v.full_resolution().iter().map(|i| i.bytes).sum();
         let pool_bytes: Vec<u64> = std::iter::once(full)
             .chain(v.bricks.iter().flat_map(|b| b.directional.iter().map(|l| l.iter().map(|i| i.bytes).sum())))
