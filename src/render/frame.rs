@@ -13,7 +13,7 @@ use super::passes::shadow::ShadowPass;
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::upload::UploadPass;
 use super::passes::voxel_bounce::{BounceComposePass, VoxelBouncePass};
-use super::passes::voxel_bricks::{BrickAllocPass, BrickClearPass, BrickReleasePass};
+use super::passes::voxel_bricks::{BrickClearPass, BrickListPass};
 use super::passes::voxel_clear::{DynamicClearPass, VoxelClearPass};
 use super::passes::voxel_light::VoxelLightPass;
 use super::passes::voxel_list::{ListKeeper, ListStep, VoxelListPass};
@@ -60,9 +60,9 @@ pub struct DynamicPasses {
 /// the allocation of the marked bricks. Before a dynamic one, the dynamic bricks of the last
 /// update are released first, and after the allocation their slots are emptied.
 pub struct BrickPasses {
-    pub release: Option<BrickReleasePass>,
+    pub release: Option<BrickListPass>,
     pub mark: VoxelizePass,
-    pub allocate: BrickAllocPass,
+    pub allocate: BrickListPass,
     pub clear: Option<BrickClearPass>,
 }
 
@@ -74,12 +74,12 @@ impl BrickPasses {
         dynamic: bool,
     ) -> GpuResult<Option<Self>> {
         let (Some(mark), Some(allocate)) =
-            (VoxelizePass::marking(voxelizer, dynamic), BrickAllocPass::new(ctx, volumes, dynamic)?)
+            (VoxelizePass::marking(voxelizer, dynamic), BrickListPass::allocate(ctx, volumes, dynamic)?)
         else {
             return Ok(None);
         };
         let (release, clear) = match dynamic {
-            true => (BrickReleasePass::new(ctx, volumes)?, BrickClearPass::new(ctx, volumes)?),
+            true => (BrickListPass::release(ctx, volumes)?, BrickClearPass::new(ctx, volumes)?),
             false => (None, None),
         };
         Ok(Some(BrickPasses { release, mark, allocate, clear }))

@@ -41,100 +41,68 @@ fn alloc_pipeline(
     Pipeline::compute(ctx, &name, shaders::BRICK_ALLOC_COMP, &[set.layout], 0, &spec)
 }
 
-/// The grid, the maps and the lists (brick_alloc.comp's bindings).
-fn alloc_set(ctx: &Arc<Context>, volumes: &VoxelVolumes, name: &str) -> GpuResult<DescriptorSet> {
-    let bricks = volumes.bricks.as_ref().expect("bricks");
-    let binds = [Bind::Uniform(&volumes.grid_buffer), volumes.brick_maps_bind(), Bind::Storage(&bricks.lists)];
-    DescriptorSet::new(ctx, name, vk::ShaderStageFlags::COMPUTE, &binds)
-}
-
-fn map_and_list_uses(volumes: &VoxelVolumes) -> Vec<Use<'_>> {
-    let mut uses = volumes.brick_map_uses(Access::ComputeShaderWrite);
-    uses.extend(volumes.bricks.iter().map(|b| Use::buffer(&b.lists, Access::ComputeShaderWrite)));
-    uses
-}
-
-/// Per pool, the map's bricks one invocation each.
-fn dispatch_per_map_entry(volumes: &VoxelVolumes, pipelines: &[Pipeline], set: &DescriptorSet, cmd: vk::CommandBuffer) {
-    let b = volumes.bricks.as_ref().expect("bricks");
-    for (pipeline, pool) in pipelines.iter().zip(&b.layout.pools) {
-        pipeline.bind(cmd, &[set.set]);
-        pipeline.dispatch(cmd, [pool.map_side; 3], [4; 3]);
-    }
-}
-
-pub struct BrickAllocPass {
+/// A step of brick_alloc.comp over the maps and lists: one dispatch per pool over its map
+/// (`per_pool`), a barrier, then one invocation (`then`). Allocation: allocate, then write the
+/// dispatches (`BrickListPass::allocate`); release: release, then restart the lists
+/// (`BrickListPass::release`).
+pub struct BrickListPass {
     volumes: Arc<VoxelVolumes>,
-    /// One pipeline per pool, then the finalizing one.
-    allocate: Vec<Pipeline>,
-    finalize: Pipeline,
+    per_pool: Vec<Pipeline>,
+    then: Pipeline,
     set: DescriptorSet,
     name: &'static str,
 }
 
-impl BrickAllocPass {
-    /// None with dense volumes. `dynamic` names the pass after the voxelization it follows.
-    pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>, dynamic: bool) -> GpuResult<Option<Self>> {
-        let Some(bricks) = &volumes.bricks else { return Ok(None) };
-        let set = alloc_set(ctx, volumes, "voxel brick allocation")?;
-        let allocate = (0..bricks.layout.pools.len() as u32)
-            .map(|p| alloc_pipeline(ctx, &set, p, Mode::Allocate, false))
-            .collect::<GpuResult<Vec<_>>>()?;
-        let finalize = alloc_pipeline(ctx, &set, 0, Mode::Finalize, !dynamic)?;
+impl BrickListPass {
+    /// After a marking run: the pending bricks allocated. None with dense volumes. `dynamic`
+    /// names the pass after the voxelization it precedes (the static one records the static
+    /// bricks).
+    pub fn allocate(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>, dynamic: bool) -> GpuResult<Option<Self>> {
         let name = if dynamic { "allocate bricks dynamic" } else { "allocate bricks static" };
-        Ok(Some(BrickAllocPass { volumes: volumes.clone(), allocate, finalize, set, name }))
+        BrickListPass::new(ctx, volumes, (Mode::Allocate, Mode::Finalize, !dynamic), name)
+    }
+
+    /// Before the dynamic objects are marked again: their bricks leave the maps and every
+    /// pool's list ends at its static bricks. None with dense volumes.
+    pub fn release(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>) -> GpuResult<Option<Self>> {
+        BrickListPass::new(ctx, volumes, (Mode::Release, Mode::Restart, false), "release bricks dynamic")
+    }
+
+    fn new(
+        ctx: &Arc<Context>,
+        volumes: &Arc<VoxelVolumes>,
+        (per_pool, then, after_static): (Mode, Mode, bool),
+        name: &'static str,
+    ) -> GpuResult<Option<Self>> {
+        let Some(bricks) = &volumes.bricks else { return Ok(None) };
+        let binds = [Bind::Uniform(&volumes.grid_buffer), volumes.brick_maps_bind(), Bind::Storage(&bricks.lists)];
+        let set = DescriptorSet::new(ctx, name, vk::ShaderStageFlags::COMPUTE, &binds)?;
+        let per_pool = (0..bricks.layout.pools.len() as u32)
+            .map(|p| alloc_pipeline(ctx, &set, p, per_pool, false))
+            .collect::<GpuResult<Vec<_>>>()?;
+        let then = alloc_pipeline(ctx, &set, 0, then, after_static)?;
+        Ok(Some(BrickListPass { volumes: volumes.clone(), per_pool, then, set, name }))
     }
 }
 
-impl Pass for BrickAllocPass {
+impl Pass for BrickListPass {
     fn name(&self) -> &str {
         self.name
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        map_and_list_uses(&self.volumes)
+        let mut uses = self.volumes.brick_map_uses(Access::ComputeShaderWrite);
+        uses.extend(self.volumes.bricks.iter().map(|b| Use::buffer(&b.lists, Access::ComputeShaderWrite)));
+        uses
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
-        dispatch_per_map_entry(&self.volumes, &self.allocate, &self.set, cmd);
+        let b = self.volumes.bricks.as_ref().expect("a brick list pass has bricks");
+        for (pipeline, pool) in self.per_pool.iter().zip(&b.layout.pools) {
+            pipeline.bind(cmd, &[self.set.set]);
+            pipeline.dispatch(cmd, [pool.map_side; 3], [4; 3]);
+        }
         super::memory_barrier(ctx, cmd, &[Access::ComputeShaderWrite], &[Access::ComputeShaderWrite]);
-        self.finalize.bind(cmd, &[self.set.set]);
-        self.finalize.dispatch(cmd, [1; 3], [4; 3]);
-    }
-}
-
-/// Before the dynamic objects are marked again: their bricks leave the maps and every pool's
-/// list ends at its static bricks.
-pub struct BrickReleasePass {
-    volumes: Arc<VoxelVolumes>,
-    release: Vec<Pipeline>,
-    restart: Pipeline,
-    set: DescriptorSet,
-}
-
-impl BrickReleasePass {
-    /// None with dense volumes.
-    pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>) -> GpuResult<Option<Self>> {
-        let Some(bricks) = &volumes.bricks else { return Ok(None) };
-        let set = alloc_set(ctx, volumes, "voxel brick release")?;
-        let release = (0..bricks.layout.pools.len() as u32)
-            .map(|p| alloc_pipeline(ctx, &set, p, Mode::Release, false))
-            .collect::<GpuResult<Vec<_>>>()?;
-        let restart = alloc_pipeline(ctx, &set, 0, Mode::Restart, false)?;
-        Ok(Some(BrickReleasePass { volumes: volumes.clone(), release, restart, set }))
-    }
-}
-
-impl Pass for BrickReleasePass {
-    fn name(&self) -> &str {
-        "release bricks dynamic"
-    }
-    fn uses(&self) -> Vec<Use<'_>> {
-        map_and_list_uses(&self.volumes)
-    }
-    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
-        dispatch_per_map_entry(&self.volumes, &self.release, &self.set, cmd);
-        super::memory_barrier(ctx, cmd, &[Access::ComputeShaderWrite], &[Access::ComputeShaderWrite]);
-        self.restart.bind(cmd, &[self.set.set]);
-        self.restart.dispatch(cmd, [1; 3], [4; 3]);
+        self.then.bind(cmd, &[self.set.set]);
+        self.then.dispatch(cmd, [1; 3], [4; 3]);
     }
 }
 
