@@ -3,10 +3,15 @@
 // column within the triangle's depth range over the pixel square is tested exactly against
 // the triangle (separating axes) and, if touched, receives a running average of linear
 // albedo, normal and emission (atomic compare-and-swap on R32_UINT). The invocation that
-// gives a voxel its first albedo sample appends the voxel to the work list. Textures are
-// sampled with the derivatives of this voxel-resolution raster, so at the mip level of one
-// voxel's footprint; an alpha-masked surface voxelizes only where its coverage over that
-// footprint reaches the cutoff (the mask's mips keep the coverage, render::texture).
+// gives a voxel its first albedo sample appends the voxel to the work list. Textures and
+// normals are sampled over the part of the pixel's square that the triangle covers: at its
+// centroid, with the texture-coordinate gradient over its extent, so at the mip level of that
+// footprint. (Interpolated attributes would not do: a conservative fragment's centre can lie
+// past the triangle's edge, where they extrapolate, and a repeating texture wraps; geometry-
+// shader dilation would stretch them.) Every rasterizer, with or without hardware conservative
+// rasterization, so samples the same texels, and an alpha-masked surface voxelizes only where
+// its coverage over the footprint it covers reaches the cutoff (the mask's mips keep the
+// coverage, render::texture).
 // With bricked volumes the same shader first runs with MARK set: it writes nothing but marks
 // every brick the voxels it touches need (bricks.glsl), for the allocation that follows.
 #include "common.glsl"
@@ -36,13 +41,13 @@ layout(set = 0, binding = 11, r32ui) uniform uimage3D brick_maps[4];
 
 layout(push_constant) uniform Push { uint mark_static; } pc;
 
-layout(location = 0) in vec3 g_normal;
-layout(location = 1) in vec2 g_uv;
-layout(location = 2) flat in uint g_material;
-layout(location = 3) flat in uint g_axis;
-layout(location = 4) flat in vec3 g_t0;
-layout(location = 5) flat in vec3 g_t1;
-layout(location = 6) flat in vec3 g_t2;
+layout(location = 0) flat in vec3 g_normals[3];
+layout(location = 3) flat in vec2 g_uvs[3];
+layout(location = 6) flat in uint g_material;
+layout(location = 7) flat in uint g_axis;
+layout(location = 8) flat in vec3 g_t0;
+layout(location = 9) flat in vec3 g_t1;
+layout(location = 10) flat in vec3 g_t2;
 
 DEFINE_ATOMIC_AVERAGE(average_albedo, vox_albedo)
 DEFINE_ATOMIC_AVERAGE(average_normal, vox_normal)
@@ -72,23 +77,106 @@ void list_append(ivec3 c) {
     }
 }
 
-void main() {
-    // Textures first, while every invocation of the quad is alive (implicit derivatives).
-    Material m = materials[g_material];
-    vec3 albedo = m.albedo.rgb;
-    int tex = m.texture.x;
-    if (tex >= 0 && uint(tex) < TEXTURE_COUNT) {
-        albedo *= texture(SCENE_TEXTURE(tex), g_uv).rgb;
-    }
-    int mask = m.texture.y;
-    float coverage = mask >= 0 && uint(mask) < TEXTURE_COUNT ? texture(SCENE_TEXTURE(mask), g_uv).a : 1.0;
-    if (coverage < MASK_CUTOFF) return;
+float cross2(vec2 a, vec2 b) {
+    return a.x * b.y - a.y * b.x;
+}
 
+// The part of the pixel square at px that the triangle (a, b, c: raster coordinates) covers:
+// the square clipped by the triangle's three edges (at most 7 corners).
+struct Footprint {
+    vec2 middle;
+    vec2 extent;  // of its bounding box, at most one pixel on each axis
+    bool empty;
+};
+
+Footprint clipped_pixel(vec2 px, vec2 a, vec2 b, vec2 c) {
+    vec2 poly[8] = vec2[8](px, px + vec2(1.0, 0.0), px + vec2(1.0), px + vec2(0.0, 1.0), vec2(0.0), vec2(0.0),
+                           vec2(0.0), vec2(0.0));
+    int count = 4;
+    vec2 tri[3] = vec2[3](a, b, c);
+    float orient = cross2(b - a, c - a) >= 0.0 ? 1.0 : -1.0;
+    for (int e = 0; e < 3; ++e) {
+        vec2 p0 = tri[e], edge = tri[(e + 1) % 3] - p0;
+        vec2 kept[8];
+        int n = 0;
+        for (int i = 0; i < count; ++i) {
+            vec2 s = poly[i], t = poly[(i + 1) % count];
+            float ds = orient * cross2(edge, s - p0), dt = orient * cross2(edge, t - p0);
+            if (ds >= 0.0) kept[n++] = s;
+            if ((ds >= 0.0) != (dt >= 0.0)) kept[n++] = mix(s, t, ds / (ds - dt));
+        }
+        poly = kept;
+        count = n;
+    }
+    Footprint f;
+    f.empty = count == 0;
+    vec2 lo = vec2(1e30), hi = vec2(-1e30), mean = vec2(0.0), moment = vec2(0.0);
+    float area2 = 0.0;
+    for (int i = 0; i < count; ++i) {
+        vec2 s = poly[i] - px, t = poly[(i + 1) % count] - px;
+        float w = cross2(s, t);
+        area2 += w;
+        moment += (s + t) * w;
+        mean += s;
+        lo = min(lo, s);
+        hi = max(hi, s);
+    }
+    // A sliver with no area (the triangle only grazes the square): its corners' mean.
+    f.middle = px + (abs(area2) > 1e-6 ? moment / (3.0 * area2) : mean / float(max(count, 1)));
+    f.extent = max(hi - lo, vec2(0.0));
+    return f;
+}
+
+// What the fragment samples of its triangle: the texture coordinates, their gradient along
+// the raster's two axes over the covered footprint, and the interpolated normal.
+struct SurfacePoint {
+    vec2 uv;
+    vec2 duv_dx;
+    vec2 duv_dy;
+    vec3 normal;
+};
+
+// The triangle (a, b, c: raster coordinates) over the part of pixel px it covers.
+SurfacePoint surface_point(Footprint f, vec3 a, vec3 b, vec3 c) {
+    vec2 e1 = b.xy - a.xy, e2 = c.xy - a.xy, q = f.middle - a.xy;
+    float det = cross2(e1, e2);
+    // Weights 1 and 2 are affine in the raster position, with gradients (e2.y, -e2.x) / det
+    // and (-e1.y, e1.x) / det.
+    vec3 w;
+    w.y = cross2(q, e2) / det;
+    w.z = cross2(e1, q) / det;
+    w.x = 1.0 - w.y - w.z;
+    vec2 du1 = g_uvs[1] - g_uvs[0], du2 = g_uvs[2] - g_uvs[0];
+    SurfacePoint s;
+    s.uv = w.x * g_uvs[0] + w.y * g_uvs[1] + w.z * g_uvs[2];
+    s.duv_dx = f.extent.x * (du1 * e2.y - du2 * e1.y) / det;
+    s.duv_dy = f.extent.y * (du2 * e1.x - du1 * e2.x) / det;
+    s.normal = w.x * g_normals[0] + w.y * g_normals[1] + w.z * g_normals[2];
+    return s;
+}
+
+void main() {
     int res = int(grid.dims.x);
     ivec2 px = ivec2(floor(gl_FragCoord.xy));
     vec3 a = to_uvw(g_t0, g_axis), b = to_uvw(g_t1, g_axis), c = to_uvw(g_t2, g_axis);
     vec3 n = cross(b - a, c - a);
     if (abs(n.z) < 1e-20) return;
+
+    Footprint covered = clipped_pixel(vec2(px), a.xy, b.xy, c.xy);
+    if (covered.empty) return;
+    SurfacePoint sp = surface_point(covered, a, b, c);
+    Material m = materials[g_material];
+    vec3 albedo = m.albedo.rgb;
+    int tex = m.texture.x;
+    if (tex >= 0 && uint(tex) < TEXTURE_COUNT) {
+        albedo *= textureGrad(SCENE_TEXTURE(tex), sp.uv, sp.duv_dx, sp.duv_dy).rgb;
+    }
+    int mask = m.texture.y;
+    float coverage = 1.0;
+    if (mask >= 0 && uint(mask) < TEXTURE_COUNT) {
+        coverage = textureGrad(SCENE_TEXTURE(mask), sp.uv, sp.duv_dx, sp.duv_dy).a;
+    }
+    if (coverage < MASK_CUTOFF) return;
     // Depth w of the triangle's plane over the pixel square's corners, clamped to the triangle.
     float wmin = 1e30, wmax = -1e30;
     for (int i = 0; i < 4; ++i) {
@@ -104,7 +192,7 @@ void main() {
     if (px.x < 0 || px.y < 0 || px.x >= res || px.y >= res) return;
 
     vec3 face = safe_normalize(cross(g_t1 - g_t0, g_t2 - g_t0), vec3(0.0, 1.0, 0.0));
-    vec3 nrm = safe_normalize(g_normal, face);
+    vec3 nrm = safe_normalize(sp.normal, face);
     vec3 emission = m.emission.rgb / grid.params.x;
 
     // A plane with slope <= 1 along u and v spans at most 3 voxels of the column.

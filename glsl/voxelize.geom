@@ -2,6 +2,9 @@
 // Voxelization: project each triangle along its dominant axis onto a resolution^2 viewport and,
 // without hardware conservative rasterization, dilate it so every pixel whose square the
 // triangle touches gets a fragment (each edge moved out by the pixel half-box's support).
+// The vertex attributes go to the fragments flat: a dilated (or conservatively rasterized)
+// fragment's interpolated attributes would be the triangle's, stretched or extrapolated past
+// its edges, so the fragment shader evaluates them on the triangle itself.
 #include "common.glsl"
 #include "voxel.glsl"
 
@@ -17,13 +20,13 @@ layout(location = 1) in vec3 v_normal[];
 layout(location = 2) in vec2 v_uv[];
 layout(location = 3) flat in uint v_material[];
 
-layout(location = 0) out vec3 g_normal;
-layout(location = 1) out vec2 g_uv;
-layout(location = 2) flat out uint g_material;
-layout(location = 3) flat out uint g_axis;
-layout(location = 4) flat out vec3 g_t0;
-layout(location = 5) flat out vec3 g_t1;
-layout(location = 6) flat out vec3 g_t2;
+layout(location = 0) flat out vec3 g_normals[3];
+layout(location = 3) flat out vec2 g_uvs[3];
+layout(location = 6) flat out uint g_material;
+layout(location = 7) flat out uint g_axis;
+layout(location = 8) flat out vec3 g_t0;
+layout(location = 9) flat out vec3 g_t1;
+layout(location = 10) flat out vec3 g_t2;
 
 float cross2(vec2 a, vec2 b) {
     return a.x * b.y - a.y * b.x;
@@ -67,8 +70,8 @@ void main() {
     float res = float(grid.dims.x);
     for (int i = 0; i < 3; ++i) {
         gl_Position = vec4(outq[i] / res * 2.0 - 1.0, 0.5, 1.0);
-        g_normal = v_normal[i];
-        g_uv = v_uv[i];
+        g_normals = v_normal;
+        g_uvs = v_uv;
         g_material = v_material[i];
         g_axis = axis;
         g_t0 = p[0];

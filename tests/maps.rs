@@ -174,22 +174,28 @@ fn an_alpha_masked_quad_voxelizes_only_where_opaque() {
     let list = r.voxel_list().unwrap().unwrap();
     drop(r);
     assert_no_validation_messages(&ctx);
-    // Voxels of the quad's layer (its plane y = 1 and the voxel below it, which it touches).
-    let layer: Vec<Vec3> = list
+    // Voxels of the quad's layer (its plane y = 1 lies inside one layer of voxels).
+    let layer: Vec<[u32; 3]> = list
         .entries
         .iter()
-        .map(|c| grid.origin + (Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) + 0.5) * grid.voxel_size)
-        .filter(|p| (p.y - 1.0).abs() < grid.voxel_size)
+        .copied()
+        .filter(|c| ((grid.origin.y + (c[1] as f32 + 0.5) * grid.voxel_size) - 1.0).abs() < grid.voxel_size)
         .collect();
-    let max_x = layer.iter().map(|p| p.x).fold(f32::MIN, f32::max);
-    let min_x = layer.iter().map(|p| p.x).fold(f32::MAX, f32::min);
-    println!("{} voxels at the quad's height, x from {min_x} to {max_x} (voxel {})", layer.len(), grid.voxel_size);
-    // The opaque half spans x in -1..0: its voxels, and none past the cut (one voxel of slack
-    // for the voxel that straddles it).
-    assert!(min_x < -1.0 + grid.voxel_size, "the opaque half is missing: {min_x}");
-    assert!(max_x < grid.voxel_size, "voxels past the cut, up to x = {max_x}");
-    let per_row = (1.0 / grid.voxel_size).floor() as usize;
-    assert!(layer.len() >= per_row * (2.0 / grid.voxel_size) as usize, "too few voxels: {}", layer.len());
+    // Exactly the voxels whose square meets the opaque half (x in -1..0, z in -1..1) in more
+    // than an edge: the voxels the quad only touches past its outer edge and the cut-away half
+    // (where a repeating mask wraps round to the opaque side) are not there.
+    let cells = |lo: f32, hi: f32, origin: f32| {
+        let first = ((lo - origin) / grid.voxel_size).floor() as u32;
+        let last = ((hi - origin) / grid.voxel_size).ceil() as u32 - 1;
+        first..=last
+    };
+    let (xs, zs) = (cells(-1.0, 0.0, grid.origin.x), cells(-1.0, 1.0, grid.origin.z));
+    let mut expected: Vec<[u32; 3]> = xs.clone().flat_map(|x| zs.clone().map(move |z| [x, 0, z])).collect();
+    let mut found: Vec<[u32; 3]> = layer.iter().map(|c| [c[0], 0, c[2]]).collect();
+    expected.sort_unstable();
+    found.sort_unstable();
+    println!("{} voxels at the quad's height, columns {xs:?}, rows {zs:?} expected", found.len());
+    assert_eq!(found, expected, "voxels of the masked quad (x, z cells; voxel {})", grid.voxel_size);
 }
 
 /// Height field h(u, v) = 0.5 + 0.25 sin(2 pi ku u) + 0.25 sin(2 pi kv v) over the square

@@ -90,7 +90,9 @@ fn coverage(rgba8: &[u8], scale: f32) -> f32 {
 /// Scales a mask level so that the fraction of its texels at or above the cutoff is as close as
 /// it gets to `target`, the fraction in level 0 (Castaño, "Computing alpha mipmaps", 2010).
 /// Averaged coverage alone makes thin cutouts (leaves, chains) fall under the cutoff and vanish
-/// at a distance; a bisection on the scale keeps their area.
+/// at a distance; a bisection on the scale keeps their area. A level that already has its
+/// coverage keeps its values: the smallest scale that matches would put every opaque texel of a
+/// hard-edged mask at the cutoff itself, and filtering across any edge would then cut it away.
 fn preserve_coverage(level: &mut MipLevel, target: f32) {
     let (mut lo, mut hi) = (0.0f32, 4.0f32);
     for _ in 0..16 {
@@ -101,11 +103,11 @@ fn preserve_coverage(level: &mut MipLevel, target: f32) {
             hi = mid;
         }
     }
-    let scale = if (coverage(&level.rgba8, hi) - target).abs() <= (coverage(&level.rgba8, lo) - target).abs() {
-        hi
-    } else {
-        lo
-    };
+    let miss = |scale: f32| (coverage(&level.rgba8, scale) - target).abs();
+    let scale = [hi, lo].into_iter().fold(1.0, |best, s| if miss(s) < miss(best) { s } else { best });
+    if scale == 1.0 {
+        return;
+    }
     for v in &mut level.rgba8 {
         *v = (f32::from(*v) * scale).round().clamp(0.0, 255.0) as u8;
     }
@@ -239,6 +241,19 @@ mod tests {
         // Black and white height texels average to 128 (not sRGB 188).
         let chain = mip_chain_for(TextureUse::Height, 2, 1, &[0, 0, 0, 0, 255, 255, 255, 255]);
         assert_eq!(chain[1].rgba8, [128, 128, 128, 128]);
+    }
+
+    #[test]
+    fn a_hard_edged_mask_keeps_its_values_where_averaging_keeps_its_coverage() {
+        // Opaque on the left half: every level down to 2 x 2 is the same cut, with opaque texels
+        // at 255. Scaling them to the cutoff (the smallest scale that keeps the coverage) would
+        // make any filtered lookup across the cut fall under it.
+        let src: Vec<u8> = (0..64u32 * 64).flat_map(|i| [if i % 64 < 32 { 255 } else { 0 }; 4]).collect();
+        let chain = mip_chain_for(TextureUse::Mask, 64, 64, &src);
+        for (k, level) in chain.iter().enumerate().take(6) {
+            let alphas: Vec<u8> = level.rgba8.chunks_exact(4).map(|p| p[3]).collect();
+            assert!(alphas.iter().all(|&a| a == 0 || a == 255), "level {k}: {alphas:?}");
+        }
     }
 
     #[test]
