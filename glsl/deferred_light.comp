@@ -2,7 +2,8 @@
 // Deferred lighting and composite: for every pixel, emission plus the sum over lights of
 // BRDF * irradiance * cos * shadow visibility (shadow maps, or the traced shadow cones), plus
 // with GI the indirect light: (albedo * diffuse-cone mean radiance + Ks * specular-cone
-// radiance) * AO. Output: linear radiance W/(sr m^2), or a debug view of the indirect light.
+// radiance) * AO, or with ray-traced reflections albedo * diffuse * AO + Ks * reflections.
+// Output: linear radiance W/(sr m^2), or a debug view of the indirect light.
 #include "common.glsl"
 #include "brdf.glsl"
 #include "lights.glsl"
@@ -16,6 +17,9 @@ layout(constant_id = 0) const bool GI = false;
 layout(constant_id = 1) const bool GI_SPECULAR = false;
 layout(constant_id = 2) const bool CONE_SHADOWS = false;
 layout(constant_id = 3) const uint OUTPUT = 0;  // 0 final, 1 indirect light only, 2 AO factor
+// The specular target holds ray-traced reflections (gi.specular = "rt"): rays see occlusion
+// themselves, so the AO factor does not dim them.
+layout(constant_id = 4) const bool RT_SPECULAR = false;
 
 layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
@@ -83,6 +87,7 @@ void main() {
         indirect = albedo * max(d.rgb, vec3(0.0)) * unscale;
         if (GI_SPECULAR) indirect += ks * max(imageLoad(gi_specular, px).rgb, vec3(0.0)) * unscale;
         indirect *= ao;
+        if (RT_SPECULAR) indirect += ks * max(imageLoad(gi_specular, px).rgb, vec3(0.0)) * unscale;
     }
     vec3 result = OUTPUT == 1u ? indirect : (OUTPUT == 2u ? vec3(ao) : radiance + indirect);
     imageStore(out_radiance, px, vec4(result, 1.0));

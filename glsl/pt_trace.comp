@@ -103,19 +103,7 @@ float box_entry(BvhNode n, vec3 o, vec3 inv, float t_max) {
     return t0 <= t1 ? t0 : -1.0;
 }
 
-// Scene texture `tex` at `uv`, level 0 (the full-resolution truth), bilinear, through the
-// explicit-level sampler (no anisotropy: lavapipe applies it to explicit-level lookups in
-// compute shaders and blurs them). A uniform loop index: no non-uniform descriptor indexing
-// needed (lavapipe has none). The loop is kept a loop: unrolled, it puts one lookup per scene
-// texture at every call site (Crytek's Sponza: 37 textures, 7 call sites), and lavapipe takes
-// seconds longer to compile the shader.
-vec4 texel(int tex, vec2 uv) {
-    vec4 c = vec4(1.0);
-    [[dont_unroll]] for (uint i = 0u; i < TEXTURE_COUNT; ++i) {
-        if (i == uint(tex)) c = textureLod(SCENE_TEXTURE(i), uv, 0.0);
-    }
-    return c;
-}
+#include "scene_texel.glsl"
 
 vec2 hit_uv(TriShade sh, vec2 b) {
     return sh.uv01.xy * (1.0 - b.x - b.y) + sh.uv01.zw * b.x + sh.uv2.xy * b.y;

@@ -15,4 +15,13 @@ struct Instance {
     uvec4 material;  // x material index
 };
 
+// A draw's triangles for ray queries (mirrors render::rays::RtDraw): a hit's instance custom
+// index is its draw.
+struct RtDraw {
+    uint first_index;
+    int vertex_offset;
+    uint instance;
+    uint pad;
+};
+
 #endif

@@ -647,6 +647,10 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
         yn(o.shader_image_float32_atomics)
     );
     outln!(
+        "  ray queries (VK_KHR_ray_query + VK_KHR_acceleration_structure, for gi.specular = \"rt\"): {}",
+        yn(o.ray_query)
+    );
+    outln!(
         "  timestamp period: {} ns; maxImageDimension2D {}, maxImageDimension3D {}, maxSamplerAnisotropy {}",
         i.timestamp_period_ns,
         i.limits.max_image_dimension2_d,

@@ -50,7 +50,7 @@ pub struct Queue {
 }
 
 /// Optional capabilities, enabled when the device has them.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Copy, Default)]
 pub struct OptionalFeatures {
     pub geometry_shader: bool,
     pub fragment_stores_and_atomics: bool,
@@ -59,6 +59,9 @@ pub struct OptionalFeatures {
     pub conservative_rasterization: bool,
     pub calibrated_timestamps: bool,
     pub shader_image_float32_atomics: bool,
+    /// VK_KHR_ray_query with VK_KHR_acceleration_structure (and buffer device addresses):
+    /// `gi.specular = "rt"`.
+    pub ray_query: bool,
 }
 
 #[derive(Debug, Clone)]
@@ -134,6 +137,8 @@ pub struct Context {
     pub debug_utils: Option<ash::ext::debug_utils::Device>,
     pub physical_device: vk::PhysicalDevice,
     pub device: ash::Device,
+    /// VK_KHR_acceleration_structure's functions, where the device has ray queries.
+    pub acceleration_structure: Option<ash::khr::acceleration_structure::Device>,
     pub graphics_queue: Queue,
     pub compute_queue: Queue,
     pub topology: QueueTopology,
@@ -203,6 +208,160 @@ fn env_flag(name: &str) -> bool {
 fn cstr_field(bytes: &[std::ffi::c_char]) -> String {
     let bytes: Vec<u8> = bytes.iter().take_while(|&&c| c != 0).map(|&c| c as u8).collect();
     String::from_utf8_lossy(&bytes).into_owned()
+}
+
+/// The queues dvsgi asks for: a graphics+compute queue, and a separate compute queue where
+/// the device has one (a compute-only family first, else a second queue of the graphics family).
+struct QueuePlan {
+    graphics_family: u32,
+    compute_family: u32,
+    compute_index: u32,
+    topology: QueueTopology,
+}
+
+impl QueuePlan {
+    fn of(fams: &[vk::QueueFamilyProperties]) -> GpuResult<QueuePlan> {
+        let gfx = fams
+            .iter()
+            .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
+            .ok_or_else(|| GpuError::NoDevice("no graphics+compute queue family".into()))? as u32;
+        let dedicated = fams.iter().position(|f| {
+            f.queue_flags.contains(vk::QueueFlags::COMPUTE) && !f.queue_flags.contains(vk::QueueFlags::GRAPHICS)
+        });
+        let (topology, compute_family, compute_index) = if let Some(cf) = dedicated {
+            (QueueTopology::DedicatedComputeFamily, cf as u32, 0)
+        } else if fams[gfx as usize].queue_count >= 2 {
+            (QueueTopology::SecondQueueSameFamily, gfx, 1)
+        } else {
+            (QueueTopology::SingleQueue, gfx, 0)
+        };
+        Ok(QueuePlan { graphics_family: gfx, compute_family, compute_index, topology })
+    }
+}
+
+/// What the device has of the features and extensions dvsgi uses where present.
+struct Negotiated {
+    optional: OptionalFeatures,
+    core: vk::PhysicalDeviceFeatures,
+    scalar_block_layout: bool,
+    host_query_reset: bool,
+    has_atomic_float: bool,
+    buffer_float32_atomics: bool,
+    /// Device extensions to enable.
+    extensions: Vec<&'static CStr>,
+}
+
+impl Negotiated {
+    fn of(instance: &ash::Instance, pd: vk::PhysicalDevice) -> GpuResult<Negotiated> {
+        let exts =
+            unsafe { instance.enumerate_device_extension_properties(pd) }.vk("vkEnumerateDeviceExtensionProperties")?;
+        let has_ext =
+            |name: &CStr| exts.iter().any(|e| e.extension_name_as_c_str().map(|n| n == name).unwrap_or(false));
+        let ext_float = has_ext(ash::ext::shader_atomic_float::NAME);
+        let ray_exts = [
+            ash::khr::acceleration_structure::NAME,
+            ash::khr::ray_query::NAME,
+            ash::khr::deferred_host_operations::NAME,
+        ];
+        let ext_rays = ray_exts.iter().all(|e| has_ext(e));
+        let mut has12 = vk::PhysicalDeviceVulkan12Features::default();
+        let mut has13 = vk::PhysicalDeviceVulkan13Features::default();
+        let mut has_float = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
+        let mut has_accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
+        let mut has_query = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+        let core = {
+            let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut has12).push_next(&mut has13);
+            if ext_float {
+                f2 = f2.push_next(&mut has_float);
+            }
+            if ext_rays {
+                f2 = f2.push_next(&mut has_accel).push_next(&mut has_query);
+            }
+            unsafe { instance.get_physical_device_features2(pd, &mut f2) };
+            f2.features
+        };
+        let optional = OptionalFeatures {
+            geometry_shader: core.geometry_shader != 0,
+            fragment_stores_and_atomics: core.fragment_stores_and_atomics != 0,
+            depth_clamp: core.depth_clamp != 0,
+            sampler_anisotropy: core.sampler_anisotropy != 0,
+            conservative_rasterization: has_ext(ash::ext::conservative_rasterization::NAME),
+            calibrated_timestamps: has_ext(ash::ext::calibrated_timestamps::NAME),
+            shader_image_float32_atomics: ext_float && has_float.shader_image_float32_atomics != 0,
+            ray_query: ext_rays
+                && has_accel.acceleration_structure != 0
+                && has_query.ray_query != 0
+                && has12.buffer_device_address != 0,
+        };
+        let mut extensions = Vec::new();
+        if ext_float {
+            extensions.push(ash::ext::shader_atomic_float::NAME);
+        }
+        if optional.conservative_rasterization {
+            extensions.push(ash::ext::conservative_rasterization::NAME);
+        }
+        if optional.calibrated_timestamps {
+            extensions.push(ash::ext::calibrated_timestamps::NAME);
+        }
+        if optional.ray_query {
+            extensions.extend(ray_exts);
+        }
+        Ok(Negotiated {
+            optional,
+            core,
+            scalar_block_layout: has12.scalar_block_layout != 0,
+            host_query_reset: has12.host_query_reset != 0,
+            has_atomic_float: ext_float,
+            buffer_float32_atomics: has_float.shader_buffer_float32_atomics != 0,
+            extensions,
+        })
+    }
+}
+
+/// What `dvsgi info` and the outputs record of the device.
+fn describe_device(
+    instance: &ash::Instance,
+    pd: vk::PhysicalDevice,
+    index: usize,
+    fams: &[vk::QueueFamilyProperties],
+    optional: OptionalFeatures,
+) -> DeviceInfo {
+    let mut driver = vk::PhysicalDeviceDriverProperties::default();
+    let mut maint3 = vk::PhysicalDeviceMaintenance3Properties::default();
+    let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver).push_next(&mut maint3);
+    unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
+    let props = p2.properties;
+    let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
+    let device_local_heap = memory.memory_heaps[..memory.memory_heap_count as usize]
+        .iter()
+        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+        .map(|h| h.size)
+        .max()
+        .unwrap_or(0);
+    DeviceInfo {
+        index,
+        name: cstr_field(&props.device_name),
+        device_type: props.device_type,
+        vendor_id: props.vendor_id,
+        api_version: props.api_version,
+        driver_name: cstr_field(&driver.driver_name),
+        driver_info: cstr_field(&driver.driver_info),
+        families: fams
+            .iter()
+            .enumerate()
+            .map(|(i, f)| QueueFamilyInfo {
+                index: i as u32,
+                flags: f.queue_flags,
+                count: f.queue_count,
+                timestamp_valid_bits: f.timestamp_valid_bits,
+            })
+            .collect(),
+        timestamp_period_ns: props.limits.timestamp_period,
+        limits: props.limits,
+        optional,
+        device_local_heap,
+        max_allocation: maint3.max_memory_allocation_size,
+    }
 }
 
 /// A physical device as listed by `dvsgi info`, with why it can or cannot be used.
@@ -311,7 +470,7 @@ impl Context {
                     device: device.clone(),
                     physical_device: physical,
                     debug_settings: Default::default(),
-                    buffer_device_address: false,
+                    buffer_device_address: info.optional.ray_query,
                     allocation_sizes: Default::default(),
                 })
                 .map_err(|e| GpuError::Alloc { name: "allocator".into(), bytes: 0, source: e });
@@ -330,6 +489,8 @@ impl Context {
                         return Err(cleanup(e));
                     }
                 };
+                let acceleration_structure =
+                    info.optional.ray_query.then(|| ash::khr::acceleration_structure::Device::new(&instance, &device));
                 let ctx = Context {
                     entry,
                     instance,
@@ -338,6 +499,7 @@ impl Context {
                     debug_utils,
                     physical_device: physical,
                     device,
+                    acceleration_structure,
                     graphics_queue: gq,
                     compute_queue: cq,
                     topology,
@@ -469,68 +631,26 @@ impl Context {
         has_debug_utils: bool,
     ) -> GpuResult<(ash::Device, Option<ash::ext::debug_utils::Device>, Queue, Queue, QueueTopology, DeviceInfo)> {
         let fams = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-        let gfx = fams
-            .iter()
-            .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
-            .ok_or_else(|| GpuError::NoDevice("no graphics+compute queue family".into()))? as u32;
-        let dedicated = fams
-            .iter()
-            .position(|f| {
-                f.queue_flags.contains(vk::QueueFlags::COMPUTE) && !f.queue_flags.contains(vk::QueueFlags::GRAPHICS)
-            })
-            .map(|i| i as u32);
-        let (topology, compute_family, compute_index) = if let Some(cf) = dedicated {
-            (QueueTopology::DedicatedComputeFamily, cf, 0)
-        } else if fams[gfx as usize].queue_count >= 2 {
-            (QueueTopology::SecondQueueSameFamily, gfx, 1)
-        } else {
-            (QueueTopology::SingleQueue, gfx, 0)
-        };
+        let plan = QueuePlan::of(&fams)?;
+        let n = Negotiated::of(&instance, pd)?;
         let priorities = [1.0f32, 1.0];
-        let mut queue_infos = vec![vk::DeviceQueueCreateInfo::default().queue_family_index(gfx).queue_priorities(
-            if topology == QueueTopology::SecondQueueSameFamily { &priorities[..2] } else { &priorities[..1] },
-        )];
-        if topology == QueueTopology::DedicatedComputeFamily {
+        let second = plan.topology == QueueTopology::SecondQueueSameFamily;
+        let mut queue_infos = vec![vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(plan.graphics_family)
+            .queue_priorities(if second { &priorities[..2] } else { &priorities[..1] })];
+        if plan.topology == QueueTopology::DedicatedComputeFamily {
             queue_infos.push(
                 vk::DeviceQueueCreateInfo::default()
-                    .queue_family_index(compute_family)
+                    .queue_family_index(plan.compute_family)
                     .queue_priorities(&priorities[..1]),
             );
         }
-
-        // Features: required core ones plus optional ones the device has.
-        let mut has12 = vk::PhysicalDeviceVulkan12Features::default();
-        let mut has13 = vk::PhysicalDeviceVulkan13Features::default();
-        let mut has_float = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
-        let exts =
-            unsafe { instance.enumerate_device_extension_properties(pd) }.vk("vkEnumerateDeviceExtensionProperties")?;
-        let has_ext =
-            |name: &CStr| exts.iter().any(|e| e.extension_name_as_c_str().map(|n| n == name).unwrap_or(false));
-        let ext_float = has_ext(ash::ext::shader_atomic_float::NAME);
-        let ext_conservative = has_ext(ash::ext::conservative_rasterization::NAME);
-        let ext_calibrated = has_ext(ash::ext::calibrated_timestamps::NAME);
-        let has10 = {
-            let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut has12).push_next(&mut has13);
-            if ext_float {
-                f2 = f2.push_next(&mut has_float);
-            }
-            unsafe { instance.get_physical_device_features2(pd, &mut f2) };
-            f2.features
-        };
-        let optional = OptionalFeatures {
-            geometry_shader: has10.geometry_shader != 0,
-            fragment_stores_and_atomics: has10.fragment_stores_and_atomics != 0,
-            depth_clamp: has10.depth_clamp != 0,
-            sampler_anisotropy: has10.sampler_anisotropy != 0,
-            conservative_rasterization: ext_conservative,
-            calibrated_timestamps: ext_calibrated,
-            shader_image_float32_atomics: ext_float && has_float.shader_image_float32_atomics != 0,
-        };
+        let (o, has10) = (n.optional, &n.core);
         let f10 = vk::PhysicalDeviceFeatures::default()
-            .geometry_shader(optional.geometry_shader)
-            .fragment_stores_and_atomics(optional.fragment_stores_and_atomics)
-            .depth_clamp(optional.depth_clamp)
-            .sampler_anisotropy(optional.sampler_anisotropy)
+            .geometry_shader(o.geometry_shader)
+            .fragment_stores_and_atomics(o.fragment_stores_and_atomics)
+            .depth_clamp(o.depth_clamp)
+            .sampler_anisotropy(o.sampler_anisotropy)
             .shader_storage_image_write_without_format(has10.shader_storage_image_write_without_format != 0)
             .shader_storage_image_read_without_format(has10.shader_storage_image_read_without_format != 0)
             .independent_blend(has10.independent_blend != 0)
@@ -538,82 +658,45 @@ impl Context {
             .shader_sampled_image_array_dynamic_indexing(has10.shader_sampled_image_array_dynamic_indexing != 0);
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
             .timeline_semaphore(true)
-            .scalar_block_layout(has12.scalar_block_layout != 0)
-            .host_query_reset(has12.host_query_reset != 0);
+            .scalar_block_layout(n.scalar_block_layout)
+            .host_query_reset(n.host_query_reset)
+            .buffer_device_address(o.ray_query);
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
             .synchronization2(true)
             .dynamic_rendering(true)
             .maintenance4(true);
         let mut ffloat = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
-            .shader_image_float32_atomics(optional.shader_image_float32_atomics)
-            .shader_buffer_float32_atomics(has_float.shader_buffer_float32_atomics != 0);
-        let mut dev_exts: Vec<*const std::ffi::c_char> = Vec::new();
-        if ext_float {
-            dev_exts.push(ash::ext::shader_atomic_float::NAME.as_ptr());
-        }
-        if ext_conservative {
-            dev_exts.push(ash::ext::conservative_rasterization::NAME.as_ptr());
-        }
-        if ext_calibrated {
-            dev_exts.push(ash::ext::calibrated_timestamps::NAME.as_ptr());
-        }
+            .shader_image_float32_atomics(o.shader_image_float32_atomics)
+            .shader_buffer_float32_atomics(n.buffer_float32_atomics);
+        let mut faccel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
+        let mut fquery = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
+        let dev_exts: Vec<*const std::ffi::c_char> = n.extensions.iter().map(|e| e.as_ptr()).collect();
         let mut dci = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
             .enabled_features(&f10)
             .enabled_extension_names(&dev_exts)
             .push_next(&mut f12)
             .push_next(&mut f13);
-        if ext_float {
+        if n.has_atomic_float {
             dci = dci.push_next(&mut ffloat);
         }
+        if o.ray_query {
+            dci = dci.push_next(&mut faccel).push_next(&mut fquery);
+        }
         let device = unsafe { instance.create_device(pd, &dci, None) }.vk("vkCreateDevice")?;
-        let gq = Queue { raw: unsafe { device.get_device_queue(gfx, 0) }, family: gfx, index: 0 };
+        let gq = Queue {
+            raw: unsafe { device.get_device_queue(plan.graphics_family, 0) },
+            family: plan.graphics_family,
+            index: 0,
+        };
         let cq = Queue {
-            raw: unsafe { device.get_device_queue(compute_family, compute_index) },
-            family: compute_family,
-            index: compute_index,
+            raw: unsafe { device.get_device_queue(plan.compute_family, plan.compute_index) },
+            family: plan.compute_family,
+            index: plan.compute_index,
         };
         let debug_utils = has_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
-
-        // Description.
-        let mut driver = vk::PhysicalDeviceDriverProperties::default();
-        let mut maint3 = vk::PhysicalDeviceMaintenance3Properties::default();
-        let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver).push_next(&mut maint3);
-        unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
-        let props = p2.properties;
-        let max_allocation = maint3.max_memory_allocation_size;
-        let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
-        let device_local_heap = memory.memory_heaps[..memory.memory_heap_count as usize]
-            .iter()
-            .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
-            .map(|h| h.size)
-            .max()
-            .unwrap_or(0);
-        let info = DeviceInfo {
-            index,
-            name: cstr_field(&props.device_name),
-            device_type: props.device_type,
-            vendor_id: props.vendor_id,
-            api_version: props.api_version,
-            driver_name: cstr_field(&driver.driver_name),
-            driver_info: cstr_field(&driver.driver_info),
-            families: fams
-                .iter()
-                .enumerate()
-                .map(|(i, f)| QueueFamilyInfo {
-                    index: i as u32,
-                    flags: f.queue_flags,
-                    count: f.queue_count,
-                    timestamp_valid_bits: f.timestamp_valid_bits,
-                })
-                .collect(),
-            timestamp_period_ns: props.limits.timestamp_period,
-            limits: props.limits,
-            optional,
-            device_local_heap,
-            max_allocation,
-        };
-        Ok((device, debug_utils, gq, cq, topology, info))
+        let info = describe_device(&instance, pd, index, &fams, o);
+        Ok((device, debug_utils, gq, cq, plan.topology, info))
     }
 
     /// All physical devices, for `dvsgi info` (creates a temporary instance).

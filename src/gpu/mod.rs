@@ -1,6 +1,7 @@
 //! The Vulkan layer: context, memory, barriers derived from access types, pipelines.
 //! Its one error type is [`GpuError`].
 
+pub mod accel;
 pub mod context;
 pub mod error;
 pub mod memory;

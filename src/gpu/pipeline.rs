@@ -22,6 +22,8 @@ pub enum Bind<'a> {
     ImageArray(Vec<vk::ImageView>, vk::ImageLayout),
     /// A sampler on its own, combined with images in the shader.
     Sampler(vk::Sampler),
+    /// A top-level acceleration structure for ray queries.
+    AccelerationStructure(vk::AccelerationStructureKHR),
 }
 
 impl Bind<'_> {
@@ -33,6 +35,7 @@ impl Bind<'_> {
             Bind::StorageImage(_) | Bind::StorageImageArray(_) => vk::DescriptorType::STORAGE_IMAGE,
             Bind::ImageArray(..) => vk::DescriptorType::SAMPLED_IMAGE,
             Bind::Sampler(_) => vk::DescriptorType::SAMPLER,
+            Bind::AccelerationStructure(_) => vk::DescriptorType::ACCELERATION_STRUCTURE_KHR,
         }
     }
     fn count(&self) -> u32 {
@@ -150,28 +153,49 @@ impl DescriptorSet {
                         })
                         .collect(),
                 ),
+                Bind::AccelerationStructure(_) => {}
             }
         }
         let (mut bi, mut ii) = (0, 0);
         let writes: Vec<_> = binds
             .iter()
             .enumerate()
-            .map(|(i, b)| {
+            .filter_map(|(i, b)| {
                 let w = vk::WriteDescriptorSet::default().dst_set(me.set).dst_binding(i as u32).descriptor_type(b.ty());
                 match b {
                     Bind::Uniform(_) | Bind::Storage(_) => {
                         bi += 1;
-                        w.buffer_info(&buffer_infos[bi - 1])
+                        Some(w.buffer_info(&buffer_infos[bi - 1]))
                     }
+                    Bind::AccelerationStructure(_) => None,
                     _ => {
                         ii += 1;
-                        w.image_info(&image_infos[ii - 1])
+                        Some(w.image_info(&image_infos[ii - 1]))
                     }
                 }
             })
             .collect();
         unsafe { d.update_descriptor_sets(&writes, &[]) };
+        me.write_acceleration_structures(binds);
         Ok(me)
+    }
+
+    /// Acceleration-structure descriptors (their write chains a structure of its own).
+    fn write_acceleration_structures(&self, binds: &[Bind]) {
+        for (i, b) in binds.iter().enumerate() {
+            if let Bind::AccelerationStructure(raw) = b {
+                let structures = [*raw];
+                let mut info =
+                    vk::WriteDescriptorSetAccelerationStructureKHR::default().acceleration_structures(&structures);
+                let write = vk::WriteDescriptorSet::default()
+                    .dst_set(self.set)
+                    .dst_binding(i as u32)
+                    .descriptor_type(b.ty())
+                    .descriptor_count(1)
+                    .push_next(&mut info);
+                unsafe { self.ctx.device.update_descriptor_sets(&[write], &[]) };
+            }
+        }
     }
 }
 

@@ -33,6 +33,10 @@ pub enum Access {
     HostRead,
     /// Arguments of an indirect dispatch (or draw) read from a buffer.
     IndirectCommandRead,
+    /// A buffer an acceleration-structure build reads its input from (instances, geometry).
+    AccelerationStructureBuildInput,
+    /// An acceleration structure (its backing buffer) traced by ray queries in compute shaders.
+    ComputeShaderReadAccelerationStructure,
     // ----- writes -----
     ColorAttachmentWrite,
     DepthAttachmentWrite,
@@ -42,6 +46,8 @@ pub enum Access {
     FragmentShaderWrite,
     TransferWrite,
     HostWrite,
+    /// An acceleration structure (its backing buffer) or build scratch written by a build.
+    AccelerationStructureBuildWrite,
 }
 
 /// Stage, access mask and layout of one [`Access`].
@@ -88,6 +94,14 @@ impl Access {
             Access::TransferRead => (S::COPY, A::TRANSFER_READ, L::TRANSFER_SRC_OPTIMAL, false),
             Access::HostRead => (S::HOST, A::HOST_READ, L::GENERAL, false),
             Access::IndirectCommandRead => (S::DRAW_INDIRECT, A::INDIRECT_COMMAND_READ, L::UNDEFINED, false),
+            // The specification's access types for builds: SHADER_READ for the inputs,
+            // ACCELERATION_STRUCTURE_READ | WRITE for the structure and the scratch.
+            Access::AccelerationStructureBuildInput => {
+                (S::ACCELERATION_STRUCTURE_BUILD_KHR, A::SHADER_READ, L::UNDEFINED, false)
+            }
+            Access::ComputeShaderReadAccelerationStructure => {
+                (S::COMPUTE_SHADER, A::ACCELERATION_STRUCTURE_READ_KHR, L::UNDEFINED, false)
+            }
             Access::ColorAttachmentWrite => (
                 S::COLOR_ATTACHMENT_OUTPUT,
                 A::COLOR_ATTACHMENT_WRITE | A::COLOR_ATTACHMENT_READ,
@@ -108,6 +122,12 @@ impl Access {
             }
             Access::TransferWrite => (S::COPY | S::CLEAR, A::TRANSFER_WRITE, L::TRANSFER_DST_OPTIMAL, true),
             Access::HostWrite => (S::HOST, A::HOST_WRITE, L::GENERAL, true),
+            Access::AccelerationStructureBuildWrite => (
+                S::ACCELERATION_STRUCTURE_BUILD_KHR,
+                A::ACCELERATION_STRUCTURE_WRITE_KHR | A::ACCELERATION_STRUCTURE_READ_KHR,
+                L::UNDEFINED,
+                true,
+            ),
         };
         AccessInfo { stage, access, layout, writes }
     }
@@ -390,6 +410,32 @@ mod tests {
     }
 
     #[test]
+    fn acceleration_structure_builds_order_against_their_inputs_and_rays() {
+        let b = barrier(
+            &[Access::AccelerationStructureBuildWrite],
+            &[Access::ComputeShaderReadAccelerationStructure],
+            false,
+            false,
+        )
+        .unwrap();
+        assert_eq!(b.src_stage, S::ACCELERATION_STRUCTURE_BUILD_KHR);
+        assert!(b.src_access.contains(A::ACCELERATION_STRUCTURE_WRITE_KHR));
+        assert_eq!((b.dst_stage, b.dst_access), (S::COMPUTE_SHADER, A::ACCELERATION_STRUCTURE_READ_KHR));
+        // Instances uploaded by the frame, then read by the build.
+        let b = barrier(&[Access::TransferWrite], &[Access::AccelerationStructureBuildInput], false, false).unwrap();
+        assert_eq!((b.dst_stage, b.dst_access), (S::ACCELERATION_STRUCTURE_BUILD_KHR, A::SHADER_READ));
+        // A rebuild after the previous frame's rays: an execution dependency only.
+        let b = barrier(
+            &[Access::ComputeShaderReadAccelerationStructure],
+            &[Access::AccelerationStructureBuildWrite],
+            false,
+            false,
+        )
+        .unwrap();
+        assert_eq!((b.src_stage, b.src_access, b.dst_access), (S::COMPUTE_SHADER, A::NONE, A::NONE));
+    }
+
+    #[test]
     fn every_access_has_consistent_info() {
         use Access::*;
         for a in [
@@ -406,12 +452,15 @@ mod tests {
             TransferRead,
             HostRead,
             IndirectCommandRead,
+            AccelerationStructureBuildInput,
+            ComputeShaderReadAccelerationStructure,
             ColorAttachmentWrite,
             DepthAttachmentWrite,
             ComputeShaderWrite,
             FragmentShaderWrite,
             TransferWrite,
             HostWrite,
+            AccelerationStructureBuildWrite,
         ] {
             let i = a.info();
             // A write access always carries a write bit in its mask.
@@ -419,7 +468,8 @@ mod tests {
                 | A::COLOR_ATTACHMENT_WRITE
                 | A::DEPTH_STENCIL_ATTACHMENT_WRITE
                 | A::TRANSFER_WRITE
-                | A::HOST_WRITE;
+                | A::HOST_WRITE
+                | A::ACCELERATION_STRUCTURE_WRITE_KHR;
             assert_eq!(i.writes, i.access.intersects(write_bits), "{a:?}");
             assert_eq!(a == Nothing, i.stage == S::NONE, "{a:?}");
         }

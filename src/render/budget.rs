@@ -98,7 +98,8 @@ impl Estimate {
         if s.gi.mode == GiMode::Vct || voxel_view {
             let vols: Vec<u64> = voxel_allocations(scene, layout).iter().map(bytes).collect();
             if VoxelNeeds::of(scene).cones && !voxel_view {
-                let specular = s.gi.specular && scene.materials.iter().any(|m| m.is_glossy());
+                let specular =
+                    s.gi.specular != crate::scene::SpecularSource::Off && scene.materials.iter().any(|m| m.is_glossy());
                 let per_px = 8 + if specular { 8 } else { 0 } + if cone_shadows(scene) { 4 } else { 0 };
                 let k = s.gi.downsample as u64;
                 let low = (iw as u64).div_ceil(k) * (ih as u64).div_ceil(k);

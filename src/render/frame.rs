@@ -20,11 +20,12 @@ use super::passes::voxel_list::{ListKeeper, ListStep, VoxelListPass};
 use super::passes::voxel_mips::{VoxelMipPass, VoxelMips};
 use super::passes::voxel_view::{VoxelMipViewPass, VoxelViewPass};
 use super::passes::voxelize::{VoxelizePass, Voxelizer};
+use super::rays::{missing_ray_queries, RtReflectPass, SceneRays, TopLevelBuildPass};
 use super::scene_gpu::SceneGpu;
 use super::voxel::VoxelVolumes;
 use super::FrameBuffers;
 use crate::gpu::{Buffer, Context, GpuResult, Image, ImageDesc};
-use crate::scene::{DirectShadows, GiMode, Scene, View, VoxelOcclusion};
+use crate::scene::{DirectShadows, GiMode, Scene, SpecularSource, View, VoxelOcclusion};
 use ash::vk;
 use std::sync::Arc;
 
@@ -114,8 +115,94 @@ pub struct BouncePasses {
 /// Per-pixel cone tracing (and the upsample when tracing at reduced resolution).
 pub struct ConePasses {
     pub trace: GiTracePass,
+    /// Only with `gi.specular = "rt"` and some glossy material: the reflections, traced into
+    /// the specular target the cone would have written.
+    pub rays: Option<RayPasses>,
     /// Only with `gi.downsample` > 1.
     pub upsample: Option<GiUpsamplePass>,
+    /// What the tracing writes at 1/k (`gi.downsample`): diffuse, specular, shadows.
+    pub low: GiTargets,
+}
+
+/// Ray-traced reflections: the scene's acceleration structures and their passes.
+pub struct RayPasses {
+    pub scene: Arc<SceneRays>,
+    /// Only when some object moves: the top level, rebuilt from the frame's instances.
+    pub build: Option<TopLevelBuildPass>,
+    pub reflect: RtReflectPass,
+}
+
+impl ConePasses {
+    fn new(
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        scene_gpu: &Arc<SceneGpu>,
+        frame: &FrameBuffers,
+        gbuffer: &Arc<GBuffer>,
+        volumes: &Arc<VoxelVolumes>,
+        placeholders: &Arc<GiPlaceholders>,
+    ) -> GpuResult<ConePasses> {
+        let s = &scene.settings;
+        let (width, height) = s.internal_size();
+        let glossy = scene.materials.iter().any(|m| m.specular.max_element() > 0.0);
+        let specular = s.gi.specular != SpecularSource::Off && glossy;
+        let rt = specular && s.gi.specular == SpecularSource::Rt;
+        let cone_shadows = cone_shadows(scene);
+        let k = s.gi.downsample;
+        let (lw, lh) = (width.div_ceil(k), height.div_ceil(k));
+        let label = if k > 1 { format!(" (1/{k})") } else { String::new() };
+        let low = GiTargets::new(ctx, &label, lw, lh, specular, cone_shadows)?;
+        let upsample = if k > 1 {
+            let full = GiTargets::new(ctx, "", width, height, specular, cone_shadows)?;
+            Some(GiUpsamplePass::new(ctx, frame, gbuffer, &volumes.gi_params, &low, full, placeholders)?)
+        } else {
+            None
+        };
+        // With rays the cone tracer leaves the specular target to the reflection pass.
+        let traced = GiTargets { specular: if rt { None } else { low.specular.clone() }, ..low.clone() };
+        let rays = match (rt, &low.specular) {
+            (true, Some(target)) => {
+                let rays = Arc::new(SceneRays::new(ctx, scene, scene_gpu, s.time)?);
+                Some(RayPasses {
+                    build: rays.dynamic.then(|| TopLevelBuildPass::new(&rays)),
+                    reflect: RtReflectPass::new(
+                        ctx,
+                        frame,
+                        gbuffer,
+                        volumes,
+                        scene_gpu,
+                        &rays,
+                        target,
+                        s.gi.specular_rays,
+                    )?,
+                    scene: rays,
+                })
+            }
+            _ => None,
+        };
+        Ok(ConePasses {
+            trace: GiTracePass::new(ctx, frame, gbuffer, volumes, traced, placeholders)?,
+            rays,
+            upsample,
+            low,
+        })
+    }
+
+    /// The targets the lighting pass reads: full resolution.
+    fn output(&self) -> &GiTargets {
+        self.upsample.as_ref().map(|u| &u.targets).unwrap_or(&self.low)
+    }
+
+    /// The passes after the G-buffer, in order.
+    fn push<'a>(&'a self, passes: &mut Vec<&'a dyn Pass>) {
+        passes.push(&self.trace);
+        if let Some(r) = &self.rays {
+            passes.push(&r.reflect);
+        }
+        if let Some(up) = &self.upsample {
+            passes.push(up);
+        }
+    }
 }
 
 /// The light propagation volume's passes (`gi.mode = "lpv"` or `"rsm+lpv"`).
@@ -426,24 +513,12 @@ impl FramePasses {
             None
         };
         let placeholders = Arc::new(GiPlaceholders::new(ctx)?);
+        if s.gi.specular == SpecularSource::Rt && !ctx.info.optional.ray_query {
+            return Err(missing_ray_queries(ctx));
+        }
         let cones = match &voxels {
             Some(v) if v.volumes.needs.cones && !voxel_view => {
-                let specular = s.gi.specular && scene.materials.iter().any(|m| m.specular.max_element() > 0.0);
-                let cone_shadows = cone_shadows(scene);
-                let k = s.gi.downsample;
-                let (lw, lh) = (width.div_ceil(k), height.div_ceil(k));
-                let label = if k > 1 { format!(" (1/{k})") } else { String::new() };
-                let low = GiTargets::new(ctx, &label, lw, lh, specular, cone_shadows)?;
-                let upsample = if k > 1 {
-                    let full = GiTargets::new(ctx, "", width, height, specular, cone_shadows)?;
-                    Some(GiUpsamplePass::new(ctx, frame, &gbuffer, &v.volumes.gi_params, &low, full, &placeholders)?)
-                } else {
-                    None
-                };
-                Some(ConePasses {
-                    trace: GiTracePass::new(ctx, frame, &gbuffer, &v.volumes, low, &placeholders)?,
-                    upsample,
-                })
+                Some(ConePasses::new(ctx, scene, scene_gpu, frame, &gbuffer, &v.volumes, &placeholders)?)
             }
             _ => None,
         };
@@ -466,10 +541,13 @@ impl FramePasses {
             }
             _ => {
                 let cone_inputs = cones.as_ref().map(|c| GiInputs {
-                    targets: c.upsample.as_ref().map(|u| &u.targets).unwrap_or(&c.trace.targets),
-                    cone_shadows: c.trace.targets.shadow.is_some(),
+                    targets: c.output(),
+                    cone_shadows: c.low.shadow.is_some(),
+                    rt_specular: c.rays.is_some(),
                 });
-                let gi = cone_inputs.or(rsm.as_ref().map(|r| GiInputs { targets: r.targets(), cone_shadows: false }));
+                let rsm_inputs =
+                    rsm.as_ref().map(|r| GiInputs { targets: r.targets(), cone_shadows: false, rt_specular: false });
+                let gi = cone_inputs.or(rsm_inputs);
                 let output = match s.view {
                     View::Indirect => LightingOutput::IndirectOnly,
                     View::Ao => LightingOutput::AmbientOcclusion,
@@ -489,12 +567,12 @@ impl FramePasses {
         };
         let shadow =
             if shadow_views > 0 { Some(ShadowPass::new(ctx, scene_gpu, frame, &atlas, shadow_views)?) } else { None };
-        let upload = UploadPass::new(vec![
-            frame.uniforms.clone(),
-            frame.lights.clone(),
-            frame.shadow_views.clone(),
-            scene_gpu.instances.clone(),
-        ]);
+        let mut uploads =
+            vec![frame.uniforms.clone(), frame.lights.clone(), frame.shadow_views.clone(), scene_gpu.instances.clone()];
+        if let Some(r) = cones.as_ref().and_then(|c| c.rays.as_ref()).filter(|r| r.build.is_some()) {
+            uploads.push(r.scene.top.instances.clone());
+        }
+        let upload = UploadPass::new(uploads);
         Ok(FramePasses {
             upload,
             voxels,
@@ -529,7 +607,7 @@ impl FramePasses {
             out.extend(v.volumes.all());
         }
         if let Some(c) = &self.cones {
-            out.extend(c.trace.targets.all());
+            out.extend(c.low.all());
             out.extend(c.upsample.iter().flat_map(|u| u.targets.all()));
         }
         if let Some(r) = &self.rsm {
@@ -550,6 +628,16 @@ impl FramePasses {
             self.readback = Some(ReadbackPasses::new(ctx, &radiance, &self.tonemap.display)?);
         }
         Ok(())
+    }
+
+    /// The ray-traced reflections' acceleration structures, where they exist.
+    pub fn rays(&self) -> Option<&RayPasses> {
+        self.cones.as_ref().and_then(|c| c.rays.as_ref())
+    }
+
+    /// The top level's rebuild, where objects move and reflections are ray traced.
+    fn top_level_build(&self) -> Option<&TopLevelBuildPass> {
+        self.rays().and_then(|r| r.build.as_ref())
     }
 
     /// The frame, in dependency order. Every schedule mode runs this list; the scheduler
@@ -610,12 +698,12 @@ impl FramePasses {
         }
         match &self.shading {
             Shading::Lighting(lighting) => {
+                if let Some(build) = self.top_level_build() {
+                    passes.push(build);
+                }
                 passes.push(&self.gbuffer);
                 if let Some(c) = &self.cones {
-                    passes.push(&c.trace);
-                    if let Some(up) = &c.upsample {
-                        passes.push(up);
-                    }
+                    c.push(&mut passes);
                 }
                 if let Some(r) = &self.rsm {
                     passes.extend(r.after_gbuffer());

@@ -9,6 +9,7 @@ pub mod graph;
 pub mod lights;
 pub mod lpv;
 pub mod passes;
+pub mod rays;
 pub mod scene_gpu;
 pub mod schedule;
 pub mod texture;
@@ -456,6 +457,9 @@ impl Renderer {
         }
         upload.set(2, bytemuck::cast_slice(&views));
         upload.set(3, &self.scene_gpu.instance_bytes(&self.scene, t));
+        if let Some(r) = self.passes.rays().filter(|r| r.build.is_some()) {
+            upload.set(4, &r.scene.instance_bytes(&self.scene, &self.scene_gpu, t));
+        }
     }
 
     /// Record and submit one frame at scene time `t`. The host waits only to reuse a frame

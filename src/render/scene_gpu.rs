@@ -59,6 +59,8 @@ pub struct Draw {
     pub dynamic: bool,
     /// The material is alpha-masked (passes that only write depth need a fragment shader).
     pub masked: bool,
+    /// The largest index (before `vertex_offset`) of the mesh.
+    pub max_index: u32,
 }
 
 pub struct SceneGpu {
@@ -360,21 +362,30 @@ impl SceneGpu {
                     material: mesh.material,
                     dynamic: object.dynamic,
                     masked: scene.materials.get(mesh.material as usize).is_some_and(|m| m.mask_texture.is_some()),
+                    max_index: mesh.indices.iter().copied().max().unwrap_or(0),
                 });
                 indices.extend_from_slice(&mesh.indices);
             }
         }
+        // Where the device has ray queries, acceleration structures are built from them too.
+        let geometry = vk::BufferUsageFlags::STORAGE_BUFFER
+            | if ctx.info.optional.ray_query {
+                vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS
+                    | vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
+            } else {
+                vk::BufferUsageFlags::empty()
+            };
         let vertex_buffer = upload_buffer(
             ctx,
             "scene vertices",
             bytemuck::cast_slice(&vertices),
-            vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+            vk::BufferUsageFlags::VERTEX_BUFFER | geometry,
         )?;
         let index_buffer = upload_buffer(
             ctx,
             "scene indices",
             bytemuck::cast_slice(&indices),
-            vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+            vk::BufferUsageFlags::INDEX_BUFFER | geometry,
         )?;
         let instances = Arc::new(Buffer::new(
             ctx,

@@ -405,6 +405,53 @@ pub enum VoxelOcclusion {
     Raymarch,
 }
 
+/// Where the indirect specular light of glossy and mirror surfaces comes from (`gi.specular`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SpecularSource {
+    /// None: glossy surfaces reflect only the lights directly.
+    Off,
+    /// A cone through the voxels along the reflection, its aperture from the lobe.
+    Cone,
+    /// Rays through the scene's triangles (ray queries): one along the reflection for mirrors,
+    /// `gi.specular_rays` sampled from the Blinn-Phong lobe for glossy surfaces. Each hit is lit
+    /// by the lights (shadow rays) and the voxels' diffuse indirect light.
+    Rt,
+}
+
+impl SpecularSource {
+    pub fn name(self) -> &'static str {
+        match self {
+            SpecularSource::Off => "off",
+            SpecularSource::Cone => "cone",
+            SpecularSource::Rt => "rt",
+        }
+    }
+}
+
+/// `"cone"`, `"rt"` or `"off"`; `true` and `false` (the key's old form) mean `"cone"` and `"off"`.
+impl<'de> serde::Deserialize<'de> for SpecularSource {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(serde::Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Flag(bool),
+            Name(String),
+        }
+        match Raw::deserialize(d)? {
+            Raw::Flag(on) => Ok(if on { SpecularSource::Cone } else { SpecularSource::Off }),
+            Raw::Name(n) => [SpecularSource::Off, SpecularSource::Cone, SpecularSource::Rt]
+                .into_iter()
+                .find(|s| s.name() == n)
+                .ok_or_else(|| {
+                    serde::de::Error::custom(format!(
+                        "unknown specular source {n:?}: expected \"cone\", \"rt\" or \"off\""
+                    ))
+                }),
+        }
+    }
+}
+
 /// How direct light is shadowed in the final image.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -481,8 +528,11 @@ pub struct GiSettings {
     /// Full aperture of each diffuse cone in degrees; 0 = automatic (each cone spans the solid
     /// angle of its share of the hemisphere).
     pub diffuse_cone_angle: f32,
-    /// Trace a specular cone (only where some material has a specular colour).
-    pub specular: bool,
+    /// The indirect specular light (only where some material has a specular colour): a cone
+    /// (default), rays (`"rt"`, on devices with ray queries) or none (`"off"`).
+    pub specular: SpecularSource,
+    /// `specular = "rt"`: rays per traced pixel on glossy surfaces (1..=64); mirrors take one.
+    pub specular_rays: u32,
     /// Multiply the cone-traced indirect light by the diffuse cones' ambient occlusion, as many
     /// engines do. Off by default: the cones' front-to-back compositing already occludes the
     /// light they gather, so this counts occlusion twice (ACCURACY.md measures what it costs).
@@ -539,7 +589,8 @@ impl Default for GiSettings {
             bounce_interleave: 4,
             diffuse_rays: 0,
             diffuse_cone_angle: 0.0,
-            specular: true,
+            specular: SpecularSource::Cone,
+            specular_rays: 4,
             ao: false,
             ao_falloff: 4.0,
             shadows: DirectShadows::ShadowMap,
@@ -588,6 +639,9 @@ impl GiSettings {
         }
         if self.first_update_bounces > 16 {
             return Err(("first_update_bounces", format!("{} is not in 0..=16", self.first_update_bounces)));
+        }
+        if !(1..=64).contains(&self.specular_rays) {
+            return Err(("specular_rays", format!("{} is not in 1..=64", self.specular_rays)));
         }
         if self.diffuse_rays > 64 {
             return Err(("diffuse_rays", format!("{} is not in 0..=64", self.diffuse_rays)));

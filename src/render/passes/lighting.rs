@@ -33,6 +33,8 @@ pub enum LightingOutput {
 pub struct GiInputs<'a> {
     pub targets: &'a GiTargets,
     pub cone_shadows: bool,
+    /// The specular target holds ray-traced reflections (not multiplied by the AO factor).
+    pub rt_specular: bool,
 }
 
 pub struct LightingPass {
@@ -86,11 +88,13 @@ impl LightingPass {
                 gsh,
             ],
         )?;
+        let rt_specular = gi.as_ref().is_some_and(|g| g.rt_specular);
         let spec = [
             (0, u32::from(gi.is_some())),
-            (1, u32::from(targets.specular.is_some())),
+            (1, u32::from(targets.specular.is_some() && !rt_specular)),
             (2, u32::from(gi.as_ref().is_some_and(|g| g.cone_shadows))),
             (3, output as u32),
+            (4, u32::from(targets.specular.is_some() && rt_specular)),
         ];
         let pipeline =
             Pipeline::compute(ctx, "deferred lighting", shaders::DEFERRED_LIGHT_COMP, &[set.layout], 0, &spec)?;

@@ -1,0 +1,283 @@
+//! Ray-traced reflections (`gi.specular = "rt"`): the scene's acceleration structures (one
+//! bottom level per draw, a top level with one instance per draw), the pass that rebuilds the
+//! top level when dynamic objects move, and the pass that traces the reflections into the cone
+//! tracer's specular target (glsl/rt_reflect.comp).
+
+use super::passes::gbuffer::GBuffer;
+use super::scene_gpu::SceneGpu;
+use super::voxel::VoxelVolumes;
+use super::FrameBuffers;
+use crate::gpu::accel::{self, AccelerationStructure, TopLevel, TriangleMesh, TriangleSource};
+use crate::gpu::{
+    shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuError, GpuResult, Image, Pipeline, Sampler,
+};
+use crate::render::graph::{Pass, QueueKind, Use};
+use crate::scene::Scene;
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use std::sync::Arc;
+
+/// Mirrors `RtDraw` in glsl/include/scene.glsl: where a hit's triangle is.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct RtDraw {
+    first_index: u32,
+    vertex_offset: i32,
+    instance: u32,
+    pad: u32,
+}
+
+/// The refusal of `gi.specular = "rt"` on a device without ray queries.
+pub fn missing_ray_queries(ctx: &Context) -> GpuError {
+    GpuError::Limit(format!(
+        "gi.specular = \"rt\" needs ray queries (VK_KHR_ray_query with VK_KHR_acceleration_structure), which {} \
+         does not have; use gi.specular = \"cone\"",
+        ctx.info.name
+    ))
+}
+
+/// The scene's acceleration structures and the draw table hits read.
+pub struct SceneRays {
+    _bottom: Vec<AccelerationStructure>,
+    bottom_addresses: Vec<vk::DeviceAddress>,
+    pub top: TopLevel,
+    pub draws: Buffer,
+    /// Some object moves: the frame rebuilds the top level.
+    pub dynamic: bool,
+}
+
+impl SceneRays {
+    /// Builds every structure for the scene at time `t` (waits for the builds).
+    pub fn new(ctx: &Arc<Context>, scene: &Scene, gpu: &SceneGpu, t: f32) -> GpuResult<SceneRays> {
+        if ctx.acceleration_structure.is_none() {
+            return Err(missing_ray_queries(ctx));
+        }
+        let source = TriangleSource {
+            vertices: accel::buffer_address(ctx, &gpu.vertices),
+            vertex_stride: std::mem::size_of::<super::scene_gpu::Vertex>() as u64,
+            indices: accel::buffer_address(ctx, &gpu.indices),
+        };
+        let meshes: Vec<TriangleMesh> = gpu
+            .draws
+            .iter()
+            .map(|d| TriangleMesh {
+                first_index: d.first_index,
+                index_count: d.index_count,
+                vertex_offset: d.vertex_offset as u32,
+                max_index: d.max_index,
+                opaque: !d.masked,
+            })
+            .collect();
+        let bottom = accel::build_bottom_levels(ctx, source, &meshes)?;
+        let table: Vec<RtDraw> = gpu
+            .draws
+            .iter()
+            .map(|d| RtDraw {
+                first_index: d.first_index,
+                vertex_offset: d.vertex_offset,
+                instance: d.instance,
+                pad: 0,
+            })
+            .collect();
+        let draws = super::scene_gpu::upload_buffer(
+            ctx,
+            "ray draw table",
+            bytemuck::cast_slice(&table),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let top = TopLevel::new(ctx, "scene top level", gpu.draws.len() as u32)?;
+        let rays = SceneRays {
+            bottom_addresses: bottom.iter().map(|b| b.address).collect(),
+            _bottom: bottom,
+            top,
+            draws,
+            dynamic: gpu.draws.iter().any(|d| d.dynamic),
+        };
+        rays.build_now(ctx, &rays.instance_bytes(scene, gpu, t))?;
+        Ok(rays)
+    }
+
+    /// The top level's instance records for time `t`, one per draw.
+    pub fn instance_bytes(&self, scene: &Scene, gpu: &SceneGpu, t: f32) -> Vec<u8> {
+        let records: Vec<_> = gpu
+            .draws
+            .iter()
+            .zip(&self.bottom_addresses)
+            .enumerate()
+            .map(|(i, (d, &blas))| {
+                let model = scene.objects[d.object].model_matrix(t).to_cols_array_2d();
+                accel::instance_record(model, i as u32, blas)
+            })
+            .collect();
+        accel::instance_bytes(&records)
+    }
+
+    /// Uploads the instances and builds the top level at load time.
+    fn build_now(&self, ctx: &Arc<Context>, instances: &[u8]) -> GpuResult<()> {
+        ctx.one_shot("build scene top level", |cmd| unsafe {
+            for (i, chunk) in instances.chunks(65536).enumerate() {
+                ctx.device.cmd_update_buffer(cmd, self.top.instances.raw, (i * 65536) as u64, chunk);
+            }
+            let barrier = [vk::MemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::COPY)
+                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR)
+                .dst_access_mask(vk::AccessFlags2::SHADER_READ)];
+            ctx.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&barrier));
+            self.top.record_build(ctx, cmd);
+        })
+    }
+}
+
+/// Rebuilds the top level from the instances the frame uploaded (scenes with dynamic objects).
+pub struct TopLevelBuildPass {
+    rays: Arc<SceneRays>,
+}
+
+impl TopLevelBuildPass {
+    pub fn new(rays: &Arc<SceneRays>) -> TopLevelBuildPass {
+        TopLevelBuildPass { rays: rays.clone() }
+    }
+}
+
+impl Pass for TopLevelBuildPass {
+    fn name(&self) -> &str {
+        "top-level build"
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        let top = &self.rays.top;
+        vec![
+            Use::buffer(&top.instances, Access::AccelerationStructureBuildInput),
+            Use::buffer(&top.structure.buffer, Access::AccelerationStructureBuildWrite),
+            Use::buffer(&top.scratch.buffer, Access::AccelerationStructureBuildWrite),
+        ]
+    }
+    fn queue(&self) -> QueueKind {
+        QueueKind::Compute
+    }
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        self.rays.top.record_build(ctx, cmd);
+    }
+}
+
+/// Traces the reflections of glossy and mirror pixels into the specular target (1/k).
+pub struct RtReflectPass {
+    frame: FrameBuffers,
+    gbuffer: Arc<GBuffer>,
+    volumes: Arc<VoxelVolumes>,
+    lod0: Arc<Image>,
+    rays: Arc<SceneRays>,
+    scene: Arc<SceneGpu>,
+    pub target: Arc<Image>,
+    pipeline: Pipeline,
+    set: DescriptorSet,
+    _sampler: Sampler,
+}
+
+impl RtReflectPass {
+    /// Everything the reflections read: the G-buffer, the voxels (for the light at the hits),
+    /// the scene's geometry and materials, and its acceleration structures.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        ctx: &Arc<Context>,
+        frame: &FrameBuffers,
+        gbuffer: &Arc<GBuffer>,
+        volumes: &Arc<VoxelVolumes>,
+        scene: &Arc<SceneGpu>,
+        rays: &Arc<SceneRays>,
+        target: &Arc<Image>,
+        specular_rays: u32,
+    ) -> GpuResult<RtReflectPass> {
+        let sampler = GBuffer::sampler(ctx)?;
+        let lod0 = volumes.final_radiance().clone();
+        let set = DescriptorSet::new(
+            ctx,
+            "rt reflections",
+            vk::ShaderStageFlags::COMPUTE,
+            &Self::binds(frame, gbuffer, volumes, scene, rays, target, &sampler, &lod0),
+        )?;
+        let spec = [(0, scene.materials.texture_count()), (1, specular_rays)];
+        let pipeline = Pipeline::compute(ctx, "rt reflections", shaders::RT_REFLECT_COMP, &[set.layout], 0, &spec)?;
+        Ok(RtReflectPass {
+            frame: frame.clone(),
+            gbuffer: gbuffer.clone(),
+            volumes: volumes.clone(),
+            lod0,
+            rays: rays.clone(),
+            scene: scene.clone(),
+            target: target.clone(),
+            pipeline,
+            set,
+            _sampler: sampler,
+        })
+    }
+
+    /// The bindings of glsl/rt_reflect.comp, in order.
+    #[allow(clippy::too_many_arguments)]
+    fn binds<'a>(
+        frame: &'a FrameBuffers,
+        gbuffer: &'a GBuffer,
+        v: &'a VoxelVolumes,
+        scene: &'a SceneGpu,
+        rays: &'a SceneRays,
+        target: &'a Image,
+        sampler: &'a Sampler,
+        lod0: &'a Image,
+    ) -> Vec<Bind<'a>> {
+        let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        let [pool_images, pool_sampler] = v.pool_binds();
+        let [materials, textures] = scene.materials.binds();
+        vec![
+            Bind::Uniform(&frame.uniforms),
+            Bind::Storage(&frame.lights),
+            Bind::Uniform(&v.grid_buffer),
+            Bind::Uniform(&v.gi_params),
+            Bind::Sampled(gbuffer.depth.view, sampler.raw, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL),
+            Bind::Sampled(gbuffer.albedo.view, sampler.raw, ro),
+            Bind::Sampled(gbuffer.normal.view, sampler.raw, ro),
+            Bind::Sampled(gbuffer.specular.view, sampler.raw, ro),
+            Bind::Sampled(lod0.view, v.sampler.raw, ro),
+            Bind::SampledArray(v.directional.iter().map(|d| d.view).collect(), v.sampler.raw, ro),
+            v.brick_maps_bind(),
+            pool_images,
+            pool_sampler,
+            Bind::StorageImage(target.view),
+            Bind::AccelerationStructure(rays.top.structure.raw),
+            Bind::Storage(&scene.vertices),
+            Bind::Storage(&scene.indices),
+            Bind::Storage(&rays.draws),
+            Bind::Storage(&scene.instances),
+            materials,
+            textures,
+            scene.materials.lod_sampler_bind(),
+        ]
+    }
+}
+
+impl Pass for RtReflectPass {
+    fn name(&self) -> &str {
+        "rt reflections"
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        let read = Access::ComputeShaderReadSampled;
+        let mut uses = self.gbuffer.surface_reads().to_vec();
+        uses.push(Use::image(&self.gbuffer.albedo, read));
+        uses.push(Use::image(&self.gbuffer.specular, read));
+        uses.push(Use::image(&self.lod0, read));
+        uses.extend(self.volumes.directional.iter().map(|d| Use::image(d, read)));
+        uses.extend(self.volumes.pool_uses());
+        uses.extend(self.volumes.brick_map_uses(Access::ComputeShaderReadStorage));
+        uses.push(Use::overwrite(&self.target, Access::ComputeShaderWrite));
+        uses.push(Use::buffer(&self.rays.top.structure.buffer, Access::ComputeShaderReadAccelerationStructure));
+        uses.push(Use::buffer(&self.scene.instances, Access::ComputeShaderReadBuffer));
+        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
+        uses
+    }
+    fn queue(&self) -> QueueKind {
+        QueueKind::Compute
+    }
+    fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
+        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.dispatch_pixels(cmd, &self.target);
+    }
+}

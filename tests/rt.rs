@@ -1,0 +1,267 @@
+//! Ray-traced reflections (`gi.specular = "rt"`) on the real device under validation: a
+//! mirror reflects a lit wall by the BRDF's specular reflectance, an alpha mask lets the
+//! reflection through where it cuts, empty space reflects black, a moving object is seen in the
+//! mirror in the frame it moves, and every schedule mode renders the same image. Devices without
+//! ray queries refuse `rt` with one line.
+
+mod common;
+
+use common::*;
+use dvsgi::render::{Mode, RenderOptions, Renderer};
+use dvsgi::scene::*;
+use glam::{Mat4, Vec2, Vec3};
+use std::f32::consts::PI;
+use std::path::PathBuf;
+
+const KS: f32 = 0.95;
+const SHININESS: f32 = 1000.0;
+const WALL_ALBEDO: f32 = 0.8;
+const IRRADIANCE: f32 = 2.0;
+
+/// A quad with corners `p` (counter-clockwise seen from `normal`) and UVs `uv`.
+fn quad_mesh(name: &str, p: [Vec3; 4], uv: [Vec2; 4], normal: Vec3, material: u32) -> Mesh {
+    let mut bounds = Aabb::EMPTY;
+    p.iter().for_each(|q| bounds.grow(*q));
+    Mesh {
+        name: name.into(),
+        positions: p.to_vec(),
+        normals: vec![normal; 4],
+        uvs: uv.to_vec(),
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material,
+        bounds,
+    }
+}
+
+const UV: [Vec2; 4] = [Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)];
+
+/// A black mirror (Ks 0.95, exponent 1000) on the floor (y = 0, x and z in -1..1) and, behind
+/// it, a white wall (z = -1.5, x in -2..2, y in 0..6) facing it, lit head-on by a sun of
+/// irradiance 2 that does not reach the mirror. The camera looks steeply down at the mirror,
+/// which reflects the wall.
+fn mirror_scene() -> Scene {
+    let v = Vec3::new;
+    let mirror = quad_mesh("mirror", [v(-1., 0., 1.), v(1., 0., 1.), v(1., 0., -1.), v(-1., 0., -1.)], UV, Vec3::Y, 0);
+    let wall =
+        quad_mesh("wall", [v(-2., 0., -1.5), v(2., 0., -1.5), v(2., 6., -1.5), v(-2., 6., -1.5)], UV, Vec3::Z, 1);
+    let mut glass = Material::diffuse("mirror", Vec3::ZERO);
+    glass.specular = Vec3::splat(KS);
+    glass.shininess = SHININESS;
+    let camera = Camera {
+        position: v(0.0, 3.0, 1.0),
+        target: v(0.0, 0.0, 0.0),
+        up: Vec3::Y,
+        fov_y_deg: 40.0,
+        near: 0.1,
+        far: 30.0,
+    };
+    let sun = Light {
+        name: "sun".into(),
+        kind: LightKind::Directional { direction: v(0.0, 0.0, -1.0), irradiance: Vec3::splat(IRRADIANCE) },
+        cast_shadows: false,
+        motion: Motion::None,
+    };
+    let mut s = scene_of(
+        vec![mirror, wall],
+        vec![glass, Material::diffuse("wall", Vec3::splat(WALL_ALBEDO))],
+        camera,
+        vec![sun],
+        Aabb { min: v(-3., -1., -3.), max: v(3., 7., 3.) },
+    );
+    s.settings.width = 48;
+    s.settings.height = 48;
+    s.settings.gi.specular = SpecularSource::Rt;
+    s
+}
+
+/// The mirror point a pixel sees, the cosine of its view angle, and where its reflection
+/// meets the wall's plane.
+fn reflection_at(scene: &Scene, x: u32, y: u32) -> (Vec3, f32, Vec3) {
+    let (o, d) = camera_ray(scene, x, y);
+    let p = o + d * (-o.y / d.y);
+    let r = Vec3::new(d.x, -d.y, d.z);
+    let hit = p + r * ((-1.5 - p.z) / r.z);
+    (p, -d.y, hit)
+}
+
+fn has_ray_queries(ctx: &dvsgi::gpu::Context) -> bool {
+    if !ctx.info.optional.ray_query {
+        println!("skipped: {} has no ray queries", ctx.info.name);
+    }
+    ctx.info.optional.ray_query
+}
+
+/// Radiance at the pixel that sees the mirror's centre.
+fn mirror_centre(out: &dvsgi::render::FrameOutput, scene: &Scene) -> Vec3 {
+    let (x, y) = project(scene, Vec3::ZERO);
+    Vec3::from(out.radiance_at(x, y))
+}
+
+#[test]
+fn a_mirror_reflects_a_lit_wall_by_its_specular_reflectance() {
+    let ctx = context();
+    if !has_ray_queries(&ctx) {
+        return;
+    }
+    let s = mirror_scene();
+    let wall = WALL_ALBEDO * IRRADIANCE / PI;
+    let (out, s) = render(&ctx, s);
+    let mut cone_scene = s.clone();
+    cone_scene.settings.gi.specular = SpecularSource::Cone;
+    let (cone, _) = render(&ctx, cone_scene);
+    let mut checked = 0;
+    for y in 0..s.settings.height {
+        for x in 0..s.settings.width {
+            let (p, c, hit) = reflection_at(&s, x, y);
+            // Mirror pixels away from its edges whose reflection lands well inside the wall.
+            let inside = p.x.abs() < 0.8 && p.z.abs() < 0.8 && hit.x.abs() < 1.5 && (0.5..5.5).contains(&hit.y);
+            if !inside {
+                continue;
+            }
+            // Blinn-Phong's directional albedo for a sharp lobe: Ks (n+8)/(n+1) cos^2.
+            let expected = KS * (SHININESS + 8.0) / (SHININESS + 1.0) * c * c * wall;
+            let got = Vec3::from(out.radiance_at(x, y));
+            let cone_got = Vec3::from(cone.radiance_at(x, y));
+            let err = (got - Vec3::splat(expected)).abs().max_element() / expected;
+            assert!(err <= 0.02, "pixel ({x}, {y}): {got} vs {expected} ({:.1}%)", err * 100.0);
+            if checked == 0 {
+                println!("rays {got}, cone {cone_got}, expected {expected} (cos {c})");
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked >= 20, "only {checked} pixels see the wall in the mirror");
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn an_alpha_mask_lets_the_reflection_through_where_it_cuts() {
+    let ctx = context();
+    if !has_ray_queries(&ctx) {
+        return;
+    }
+    let mut s = mirror_scene();
+    // The wall is there only where x < 0 (u < 0.5).
+    s.materials[1].mask_texture = Some(0);
+    let rgba8 = (0..64u32 * 64).flat_map(|i| [if i % 64 < 32 { 255 } else { 0 }; 4]).collect();
+    s.textures = vec![Texture { path: PathBuf::from("mask"), width: 64, height: 64, rgba8, usage: TextureUse::Mask }];
+    let (out, s) = render(&ctx, s);
+    let (mut kept, mut cut) = (0, 0);
+    for y in 0..s.settings.height {
+        for x in 0..s.settings.width {
+            let (p, c, hit) = reflection_at(&s, x, y);
+            if p.x.abs() > 0.8 || p.z.abs() > 0.8 || !(0.5..5.5).contains(&hit.y) {
+                continue;
+            }
+            let got = Vec3::from(out.radiance_at(x, y)).max_element();
+            let wall = KS * c * c * WALL_ALBEDO * IRRADIANCE / PI;
+            if (-1.5..-0.3).contains(&hit.x) {
+                assert!(got > 0.9 * wall, "({x}, {y}) should reflect the wall: {got} vs {wall}");
+                kept += 1;
+            } else if (0.3..1.5).contains(&hit.x) {
+                assert!(got < 0.02 * wall, "({x}, {y}) should see through the cut: {got}");
+                cut += 1;
+            }
+        }
+    }
+    assert!(kept >= 10 && cut >= 10, "kept {kept}, cut {cut}");
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn a_mirror_facing_empty_space_reflects_black() {
+    let ctx = context();
+    if !has_ray_queries(&ctx) {
+        return;
+    }
+    let mut s = mirror_scene();
+    s.objects.truncate(1); // the mirror alone
+    let (out, s) = render(&ctx, s);
+    let centre = mirror_centre(&out, &s);
+    assert_eq!(centre, Vec3::ZERO, "the mirror reflects nothing: {centre}");
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn a_moving_object_is_in_the_mirror_in_the_frame_it_moves() {
+    let ctx = context();
+    if !has_ray_queries(&ctx) {
+        return;
+    }
+    let mut s = mirror_scene();
+    let v = Vec3::new;
+    // A red panel in front of the wall where the mirror's centre reflects it, moving out of
+    // the way between t = 0 and t = 1 (keyframes clamp at the ends).
+    let (x, y) = project(&s, Vec3::ZERO);
+    let (p, _, hit) = reflection_at(&s, x, y);
+    let c = p + (hit - p) * ((-1.2 - p.z) / (hit.z - p.z));
+    let panel = quad_mesh(
+        "panel",
+        [c + v(-0.6, -0.6, 0.0), c + v(0.6, -0.6, 0.0), c + v(0.6, 0.6, 0.0), c + v(-0.6, 0.6, 0.0)],
+        UV,
+        Vec3::Z,
+        2,
+    );
+    s.meshes.push(panel);
+    s.materials.push(Material::diffuse("red", v(0.9, 0.05, 0.05)));
+    let key =
+        |time: f32, x: f32| Keyframe { time, translate: v(x, 0.0, 0.0), rotate_deg: Vec3::ZERO, scale: Vec3::ONE };
+    s.objects.push(Object {
+        name: "panel".into(),
+        meshes: vec![2],
+        transform: Mat4::IDENTITY,
+        dynamic: true,
+        motion: Motion::Keyframes(vec![key(0.0, 0.0), key(1.0, 2.5)]),
+    });
+    let mut r = Renderer::new(&ctx, s.clone()).expect("renderer");
+    r.render(0.0, true).expect("frame at t = 0");
+    let before = mirror_centre(&r.output(), &s);
+    r.render(1.0, true).expect("frame at t = 1");
+    let after = mirror_centre(&r.output(), &s);
+    r.render(0.0, true).expect("frame back at t = 0");
+    let back = mirror_centre(&r.output(), &s);
+    drop(r);
+    println!("mirror centre: panel in front {before}, moved away {after}, back {back}");
+    assert!(before.x > 4.0 * before.y, "the red panel is in the mirror: {before}");
+    assert!((after.x - after.y).abs() < 0.1 * after.x, "the wall, white, is in the mirror: {after}");
+    assert!(back.x > 4.0 * back.y, "the panel is back in the mirror: {back}");
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn every_schedule_mode_renders_the_same_reflections() {
+    let ctx = context();
+    if !has_ray_queries(&ctx) {
+        return;
+    }
+    let s = mirror_scene();
+    let t = s.settings.time;
+    let mut r = Renderer::with_options(&ctx, s, RenderOptions { mode: Mode::Sync, frames_in_flight: 2 }).unwrap();
+    r.render(t, true).unwrap();
+    let sync = r.output().radiance;
+    for mode in [Mode::Async, Mode::AsyncLagged] {
+        r.set_mode(mode);
+        r.render(t, true).unwrap();
+        assert!(r.output().radiance == sync, "{mode} differs from sync");
+        assert!(r.last_pass_names().iter().any(|n| n == "rt reflections"), "{mode}: {:?}", r.last_pass_names());
+    }
+    drop(r);
+    assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn rt_needs_ray_queries_and_says_so() {
+    let ctx = context();
+    let mut s = mirror_scene();
+    s.settings.gi.specular = SpecularSource::Rt;
+    match Renderer::new(&ctx, s) {
+        Ok(_) => assert!(ctx.info.optional.ray_query, "rendered rt without ray queries"),
+        Err(e) => {
+            assert!(!ctx.info.optional.ray_query, "refused with ray queries: {e}");
+            let msg = e.to_string();
+            assert!(msg.contains("VK_KHR_ray_query") && msg.contains("gi.specular = \"cone\""), "{msg}");
+            assert_eq!(msg.lines().count(), 1, "{msg}");
+        }
+    }
+    assert_no_validation_messages(&ctx);
+}
