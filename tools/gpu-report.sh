@@ -4,8 +4,8 @@
 #
 #   tools/gpu-report.sh [--bundle DIR] [--only GROUPS] OUT_DIR
 #
-# GROUPS (comma-separated; default all): info, tests, bench, layouts, techniques, serial, sweep,
-# accuracy, curves.
+# GROUPS (comma-separated; default all): info, tests, bench, layouts, techniques, reflections,
+# serial, sweep, accuracy, curves.
 # Runs into an existing OUT_DIR add to it (steps.tsv appends), so a report can be split across
 # several shorter sessions on the GPU machine; README.md is rewritten from all of OUT_DIR.
 #
@@ -16,6 +16,9 @@
 #                          bench-{cornell,sponza}-{rsm,lpv,rsm-lpv}: the other techniques, static
 #   bench-layout-*         the voxel layouts (issue 27): Sponza at 128^3, 256^3 and 512^3, bricks
 #                          and dense, sync, 1920x1080; info-layouts.txt: their memory
+#   bench-reflect-*       the reflections (issue 28): the mirror and glossy Cornell boxes with the
+#                          specular cone and with ray-traced reflections (gi.specular = "rt"),
+#                          sync and async; a device without ray queries records the refusal
 #   sweep-cornell/         a short speed/accuracy sweep against the path-traced reference, with
 #                          rows for rsm, lpv and rsm+lpv on the same frontier
 #   serial-*.json/.txt     the serial profile (every pass submitted alone and host-timed)
@@ -52,8 +55,8 @@ if [ $# -ne 1 ]; then
 fi
 for g in ${only//,/ }; do
   case "$g" in
-    info | tests | bench | layouts | techniques | serial | sweep | accuracy | curves) ;;
-    *) echo "gpu-report: unknown group '$g' (info, tests, bench, layouts, techniques, serial, sweep, accuracy, curves)" >&2; exit 2 ;;
+    info | tests | bench | layouts | techniques | reflections | serial | sweep | accuracy | curves) ;;
+    *) echo "gpu-report: unknown group '$g' (info, tests, bench, layouts, techniques, reflections, serial, sweep, accuracy, curves)" >&2; exit 2 ;;
   esac
 done
 # want GROUP: whether this run measures GROUP.
@@ -212,6 +215,16 @@ want techniques && for run in "cornell cornell-box" "sponza sponza"; do
     tag="$name-${mode/+/-}"
     step "bench-$tag" 300 "$bin/bench" --scene "scenes/$scene.toml" --modes sync,async,async-lagged \
       --width "$w" --height "$h" --set "gi.mode=\"$mode\"" --frames "$frames" --warmup "$warmup" \
+      --json "$out/bench-$tag.json" --timeline "$out/bench-$tag.svg" >"$out/bench-$tag.txt" 2>&1
+  done
+done
+
+# ----- 3c. Reflections (issue 28): the specular cone against ray-traced reflections. -----
+want reflections && for scene in cornell-mirror cornell-glossy; do
+  for spec in cone rt; do
+    tag="reflect-$scene-$spec"
+    step "bench-$tag" 300 "$bin/bench" --scene "scenes/$scene.toml" --modes sync,async --width "$w" --height "$h" \
+      --set "gi.specular=\"$spec\"" --frames "$frames" --warmup "$warmup" \
       --json "$out/bench-$tag.json" --timeline "$out/bench-$tag.svg" >"$out/bench-$tag.txt" 2>&1
   done
 done
