@@ -62,6 +62,11 @@ pub enum Param {
     LpvResolution,
     /// `gi.lpv_steps`.
     LpvSteps,
+    /// `gi.specular`, where reflections come from: values are names (`--grid specular=cone,rt`),
+    /// held as their index in [`SPECULAR_SOURCES`].
+    Specular,
+    /// `gi.specular_rays`: rays per traced pixel on glossy surfaces with `specular = "rt"`.
+    SpecularRays,
 }
 
 /// The `gi.mode` values a sweep can compare, in the order of their index as a knob value.
@@ -71,12 +76,27 @@ fn technique_index(mode: &str) -> f64 {
     TECHNIQUES.iter().position(|t| *t == mode).map_or(f64::NAN, |i| i as f64)
 }
 
+/// The `gi.specular` values a sweep can compare, in the order of their index as a knob value.
+pub const SPECULAR_SOURCES: [&str; 3] = ["off", "cone", "rt"];
+
+fn specular_index(source: &str) -> f64 {
+    SPECULAR_SOURCES.iter().position(|t| *t == source).map_or(f64::NAN, |i| i as f64)
+}
+
+fn cone() -> String {
+    "cone".to_owned()
+}
+
+fn four() -> u32 {
+    4
+}
+
 fn vct() -> String {
     "vct".to_owned()
 }
 
 impl Param {
-    pub const ALL: [Param; 15] = [
+    pub const ALL: [Param; 17] = [
         Param::VoxelResolution,
         Param::DiffuseCones,
         Param::DiffuseConeAngle,
@@ -92,6 +112,8 @@ impl Param {
         Param::RsmSize,
         Param::LpvResolution,
         Param::LpvSteps,
+        Param::Specular,
+        Param::SpecularRays,
     ];
     /// The key under `[gi]`.
     pub fn key(self) -> &'static str {
@@ -111,6 +133,8 @@ impl Param {
             Param::RsmSize => "rsm_size",
             Param::LpvResolution => "lpv_resolution",
             Param::LpvSteps => "lpv_steps",
+            Param::Specular => "specular",
+            Param::SpecularRays => "specular_rays",
         }
     }
     /// Short prefix in configuration labels.
@@ -131,6 +155,8 @@ impl Param {
             Param::RsmSize => "m",
             Param::LpvResolution => "g",
             Param::LpvSteps => "p",
+            Param::Specular => "spec-",
+            Param::SpecularRays => "sr",
         }
     }
     fn integer(self) -> bool {
@@ -185,6 +211,13 @@ impl Grid {
                     let i = technique_index(v);
                     if i.is_nan() {
                         return Err(bad(format!("{v:?} is not a technique; one of {}", TECHNIQUES.join(", "))));
+                    }
+                    i
+                } else if param == Param::Specular {
+                    let i = specular_index(v);
+                    if i.is_nan() {
+                        let names = SPECULAR_SOURCES.join(", ");
+                        return Err(bad(format!("{v:?} is not a specular source; one of {names}")));
                     }
                     i
                 } else {
@@ -247,7 +280,7 @@ impl Config {
             .map(|(p, v)| {
                 let value = match p {
                     Param::Ao => (*v != 0.0).to_string(),
-                    Param::Mode => format!("{:?}", value_text(*p, *v)),
+                    Param::Mode | Param::Specular => format!("{:?}", value_text(*p, *v)),
                     _ => fmt_value(*v),
                 };
                 (format!("gi.{}", p.key()), value)
@@ -263,6 +296,7 @@ impl Config {
 fn value_text(p: Param, v: f64) -> String {
     match p {
         Param::Mode => TECHNIQUES.get(v as usize).copied().unwrap_or("?").to_owned(),
+        Param::Specular => SPECULAR_SOURCES.get(v as usize).copied().unwrap_or("?").to_owned(),
         _ => fmt_value(v),
     }
 }
@@ -315,6 +349,11 @@ pub struct Row {
     pub lpv_resolution: u32,
     #[serde(default)]
     pub lpv_steps: u32,
+    /// `gi.specular` ("cone" in rows from before it was recorded) and `gi.specular_rays`.
+    #[serde(default = "cone")]
+    pub specular: String,
+    #[serde(default = "four")]
+    pub specular_rays: u32,
     /// Median host wall clock of a frame that updates the voxels (relight, mips, bounces)
     /// and traces: the cost when lights or objects move. The front is drawn against this.
     pub frame_ms: f64,
@@ -356,6 +395,8 @@ impl Row {
             rsm_size: s.rsm_size,
             lpv_resolution: s.lpv_resolution,
             lpv_steps: s.lpv_steps,
+            specular: s.specular.name().to_owned(),
+            specular_rays: s.specular_rays,
             frame_ms: time[0],
             frame_p95_ms: time[1],
             static_frame_ms: time[2],
@@ -440,6 +481,8 @@ impl Row {
             Param::RsmSize => self.rsm_size as f64,
             Param::LpvResolution => self.lpv_resolution as f64,
             Param::LpvSteps => self.lpv_steps as f64,
+            Param::Specular => specular_index(&self.specular),
+            Param::SpecularRays => self.specular_rays as f64,
         }
     }
 }
@@ -834,6 +877,32 @@ mod tests {
             assert!(Grid::parse(&[bad.into()]).is_err(), "{bad}");
         }
         assert!(Grid::parse(&["step=1".into(), "step=2".into()]).is_err());
+    }
+
+    #[test]
+    fn the_specular_source_is_a_knob_by_name() {
+        let g = Grid::parse(&["specular=cone,rt".into(), "specular_rays=1,8".into()]).unwrap();
+        let c = g.configs();
+        assert_eq!(c.len(), 4);
+        assert_eq!(c[3].label(), "spec-rt sr8");
+        assert_eq!(
+            c[3].overrides(),
+            vec![("gi.specular".to_string(), "\"rt\"".to_string()), ("gi.specular_rays".into(), "8".into())]
+        );
+        assert!(Grid::parse(&["specular=mirror".into()]).is_err());
+        let mut settings = crate::scene::GiSettings::default();
+        settings.specular = crate::scene::SpecularSource::Rt;
+        let c = Comparison {
+            rmse: 0.1,
+            relmse: 0.1,
+            flip: crate::metrics::Summary::of(&[0.1]),
+            ssim: crate::metrics::Summary::of(&[0.9]),
+            pixels: 1,
+            test_mean: 1.0,
+            reference_mean: 1.0,
+        };
+        let r = Row::new("spec-rt".into(), &settings, [1.0; 3], 1.0, &c);
+        assert_eq!((r.knob(Param::Specular), r.specular.as_str()), (2.0, "rt"));
     }
 
     fn row(label: &str, ms: f64, rmse: f64, ssim: f64) -> Row {

@@ -400,7 +400,8 @@ fn specular_light_comes_from_the_mirror_direction() {
             Aabb { min: Vec3::new(-1.05, -0.05, -1.05), max: Vec3::new(1.05, 2.05, 1.05) },
         );
         s.settings.gi.bounces = 0;
-        s.settings.gi.specular = specular;
+        s.settings.gi.specular =
+            if specular { dvsgi::scene::SpecularSource::Cone } else { dvsgi::scene::SpecularSource::Off };
         s.settings.view = dvsgi::scene::View::Indirect;
         render(&ctx, s)
     };
