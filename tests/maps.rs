@@ -195,7 +195,15 @@ fn an_alpha_masked_quad_voxelizes_only_where_opaque() {
     expected.sort_unstable();
     found.sort_unstable();
     println!("{} voxels at the quad's height, columns {xs:?}, rows {zs:?} expected", found.len());
-    assert_eq!(found, expected, "voxels of the masked quad (x, z cells; voxel {})", grid.voxel_size);
+    // The cut itself is where the bilinear mask crosses the cutoff, exactly 0.5 between two
+    // texels: a sliver of triangle just past it samples 0.5 less a rounding error, and GPUs
+    // round filter weights (NVIDIA's H200 kept one voxel of the column past the cut, touched by
+    // such a sliver at the quad's diagonal; lavapipe keeps none). Only that column may differ.
+    let past_cut = xs.end() + 1;
+    let extra: Vec<_> = found.iter().filter(|c| !expected.contains(c)).collect();
+    assert!(extra.iter().all(|c| c[0] == past_cut), "voxels past the cut: {extra:?}");
+    let missing: Vec<_> = expected.iter().filter(|c| !found.contains(c)).collect();
+    assert!(missing.is_empty(), "voxels of the opaque half missing: {missing:?} (voxel {})", grid.voxel_size);
 }
 
 /// Height field h(u, v) = 0.5 + 0.25 sin(2 pi ku u) + 0.25 sin(2 pi kv v) over the square

@@ -386,6 +386,7 @@ pub(crate) const GI_KEYS: &[&str] = &[
     "diffuse_rays",
     "diffuse_cone_angle",
     "specular",
+    "specular_rays",
     "ao",
     "ao_falloff",
     "shadows",
