@@ -21,7 +21,8 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(constant_id = 0) const uint TEXTURE_COUNT = 1;
-layout(constant_id = 1) const uint SPECULAR_RAYS = 4u;  // gi.specular_rays
+layout(constant_id = 1) const uint SPECULAR_RAYS = 16u;  // gi.specular_rays
+layout(constant_id = 2) const bool HIT_CONES = true;    // gi.rt_hit_indirect: cones, else voxel
 
 layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
@@ -45,6 +46,7 @@ layout(set = 0, binding = 18, std430) readonly buffer Instances { Instance insta
 layout(set = 0, binding = 19, std430) readonly buffer Materials { Material materials[]; };
 layout(set = 0, binding = 20) uniform texture2D textures[TEXTURE_COUNT];
 layout(set = 0, binding = 21) uniform sampler texture_sampler;
+layout(set = 0, binding = 22) uniform sampler3D vox_direct;  // the voxels' direct radiance
 #include "cone.glsl"
 #include "ray_query.glsl"
 
@@ -63,6 +65,21 @@ float ray_offset(vec3 P) {
     return 0.01 * grid.origin.w + 1e-5 * max(abs(P.x), max(abs(P.y), abs(P.z)));
 }
 
+// The voxel GI's diffuse light leaving hit surface s: the diffuse cones from it, or its voxel's
+// bounced light (bounced minus direct radiance, in the voxel the surface lies in).
+vec3 hit_indirect(HitSurface s) {
+    vec3 g = (s.P - grid.origin.xyz) / grid.origin.w;
+    if (HIT_CONES) {
+        vec4 diffuse = trace_diffuse(ConeOrigin(g, s.ns, 0.0));
+        float ao = (gi.counts.w & GI_FLAG_AO) != 0u ? diffuse.a : 1.0;
+        return s.albedo * max(diffuse.rgb, vec3(0.0)) * frame.radiance_scale.y * ao;
+    }
+    ivec3 t = full_texel(ivec3(floor(g - s.ng * 0.25)));
+    if (t.x < 0) return vec3(0.0);
+    vec3 bounced = texelFetch(vox_lod0, t, 0).rgb - texelFetch(vox_direct, t, 0).rgb;
+    return max(bounced, vec3(0.0)) * frame.radiance_scale.y;
+}
+
 // Radiance leaving the hit surface s towards -d: emission, the lights, the voxel GI.
 vec3 shade_hit(HitSurface s, vec3 d) {
     vec3 V = -d;
@@ -78,11 +95,7 @@ vec3 shade_hit(HitSurface s, vec3 d) {
         vec3 f = brdf_diffuse(s.albedo) + brdf_specular(s.ks, s.shininess, s.ns, V, ls.wi);
         L += f * ls.irradiance * cos_theta;
     }
-    ConeOrigin o = ConeOrigin((s.P - grid.origin.xyz) / grid.origin.w, s.ns, 0.0);
-    vec4 diffuse = trace_diffuse(o);
-    float ao = (gi.counts.w & GI_FLAG_AO) != 0u ? diffuse.a : 1.0;
-    L += s.albedo * max(diffuse.rgb, vec3(0.0)) * frame.radiance_scale.y * ao;
-    return L;
+    return L + hit_indirect(s);
 }
 
 vec3 ray_radiance(vec3 o, vec3 d) {

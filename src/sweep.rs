@@ -67,28 +67,42 @@ pub enum Param {
     Specular,
     /// `gi.specular_rays`: rays per traced pixel on glossy surfaces with `specular = "rt"`.
     SpecularRays,
+    /// `gi.rt_hit_indirect`, by name (index in [`HIT_INDIRECT`]).
+    RtHitIndirect,
 }
 
 /// The `gi.mode` values a sweep can compare, in the order of their index as a knob value.
 pub const TECHNIQUES: [&str; 5] = ["none", "vct", "rsm", "lpv", "rsm+lpv"];
 
 fn technique_index(mode: &str) -> f64 {
-    TECHNIQUES.iter().position(|t| *t == mode).map_or(f64::NAN, |i| i as f64)
+    name_index(&TECHNIQUES, mode)
 }
 
 /// The `gi.specular` values a sweep can compare, in the order of their index as a knob value.
 pub const SPECULAR_SOURCES: [&str; 3] = ["off", "cone", "rt"];
 
+/// The `gi.rt_hit_indirect` values, in the order of their index as a knob value.
+pub const HIT_INDIRECT: [&str; 2] = ["cones", "voxel"];
+
+/// A name's index among a knob's names (NaN if it is not one).
+fn name_index(names: &[&str], name: &str) -> f64 {
+    names.iter().position(|t| *t == name).map_or(f64::NAN, |i| i as f64)
+}
+
 fn specular_index(source: &str) -> f64 {
-    SPECULAR_SOURCES.iter().position(|t| *t == source).map_or(f64::NAN, |i| i as f64)
+    name_index(&SPECULAR_SOURCES, source)
+}
+
+fn voxel() -> String {
+    "voxel".to_owned()
 }
 
 fn cone() -> String {
     "cone".to_owned()
 }
 
-fn four() -> u32 {
-    4
+fn sixteen() -> u32 {
+    16
 }
 
 fn vct() -> String {
@@ -96,7 +110,7 @@ fn vct() -> String {
 }
 
 impl Param {
-    pub const ALL: [Param; 17] = [
+    pub const ALL: [Param; 18] = [
         Param::VoxelResolution,
         Param::DiffuseCones,
         Param::DiffuseConeAngle,
@@ -114,6 +128,7 @@ impl Param {
         Param::LpvSteps,
         Param::Specular,
         Param::SpecularRays,
+        Param::RtHitIndirect,
     ];
     /// The key under `[gi]`.
     pub fn key(self) -> &'static str {
@@ -135,6 +150,7 @@ impl Param {
             Param::LpvSteps => "lpv_steps",
             Param::Specular => "specular",
             Param::SpecularRays => "specular_rays",
+            Param::RtHitIndirect => "rt_hit_indirect",
         }
     }
     /// Short prefix in configuration labels.
@@ -157,6 +173,16 @@ impl Param {
             Param::LpvSteps => "p",
             Param::Specular => "spec-",
             Param::SpecularRays => "sr",
+            Param::RtHitIndirect => "hit-",
+        }
+    }
+    /// The names a knob's values are written as, for knobs that take names.
+    fn names(self) -> Option<&'static [&'static str]> {
+        match self {
+            Param::Mode => Some(&TECHNIQUES),
+            Param::Specular => Some(&SPECULAR_SOURCES),
+            Param::RtHitIndirect => Some(&HIT_INDIRECT),
+            _ => None,
         }
     }
     fn integer(self) -> bool {
@@ -207,17 +233,10 @@ impl Grid {
             }
             let mut vals = Vec::new();
             for v in values.split(',').map(str::trim).filter(|v| !v.is_empty()) {
-                let x: f64 = if param == Param::Mode {
-                    let i = technique_index(v);
+                let x: f64 = if let Some(names) = param.names() {
+                    let i = name_index(names, v);
                     if i.is_nan() {
-                        return Err(bad(format!("{v:?} is not a technique; one of {}", TECHNIQUES.join(", "))));
-                    }
-                    i
-                } else if param == Param::Specular {
-                    let i = specular_index(v);
-                    if i.is_nan() {
-                        let names = SPECULAR_SOURCES.join(", ");
-                        return Err(bad(format!("{v:?} is not a specular source; one of {names}")));
+                        return Err(bad(format!("{v:?} is not a {} value; one of {}", param.key(), names.join(", "))));
                     }
                     i
                 } else {
@@ -280,7 +299,7 @@ impl Config {
             .map(|(p, v)| {
                 let value = match p {
                     Param::Ao => (*v != 0.0).to_string(),
-                    Param::Mode | Param::Specular => format!("{:?}", value_text(*p, *v)),
+                    _ if p.names().is_some() => format!("{:?}", value_text(*p, *v)),
                     _ => fmt_value(*v),
                 };
                 (format!("gi.{}", p.key()), value)
@@ -294,10 +313,9 @@ impl Config {
 
 /// A knob value as written: a technique's name, else the number.
 fn value_text(p: Param, v: f64) -> String {
-    match p {
-        Param::Mode => TECHNIQUES.get(v as usize).copied().unwrap_or("?").to_owned(),
-        Param::Specular => SPECULAR_SOURCES.get(v as usize).copied().unwrap_or("?").to_owned(),
-        _ => fmt_value(v),
+    match p.names() {
+        Some(names) => names.get(v as usize).copied().unwrap_or("?").to_owned(),
+        None => fmt_value(v),
     }
 }
 
@@ -352,8 +370,11 @@ pub struct Row {
     /// `gi.specular` ("cone" in rows from before it was recorded) and `gi.specular_rays`.
     #[serde(default = "cone")]
     pub specular: String,
-    #[serde(default = "four")]
+    #[serde(default = "sixteen")]
     pub specular_rays: u32,
+    /// `gi.rt_hit_indirect` ("voxel" in rows from before it was recorded).
+    #[serde(default = "voxel")]
+    pub rt_hit_indirect: String,
     /// Median host wall clock of a frame that updates the voxels (relight, mips, bounces)
     /// and traces: the cost when lights or objects move. The front is drawn against this.
     pub frame_ms: f64,
@@ -397,6 +418,10 @@ impl Row {
             lpv_steps: s.lpv_steps,
             specular: s.specular.name().to_owned(),
             specular_rays: s.specular_rays,
+            rt_hit_indirect: serde_json::to_value(s.rt_hit_indirect)
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_owned))
+                .unwrap_or_else(voxel),
             frame_ms: time[0],
             frame_p95_ms: time[1],
             static_frame_ms: time[2],
@@ -483,6 +508,7 @@ impl Row {
             Param::LpvSteps => self.lpv_steps as f64,
             Param::Specular => specular_index(&self.specular),
             Param::SpecularRays => self.specular_rays as f64,
+            Param::RtHitIndirect => name_index(&HIT_INDIRECT, &self.rt_hit_indirect),
         }
     }
 }
@@ -890,6 +916,9 @@ mod tests {
             vec![("gi.specular".to_string(), "\"rt\"".to_string()), ("gi.specular_rays".into(), "8".into())]
         );
         assert!(Grid::parse(&["specular=mirror".into()]).is_err());
+        let hit = Grid::parse(&["rt_hit_indirect=cones,voxel".into()]).unwrap().configs();
+        assert_eq!(hit[0].overrides(), vec![("gi.rt_hit_indirect".to_string(), "\"cones\"".to_string())]);
+        assert_eq!(hit[1].label(), "hit-voxel");
         let mut settings = crate::scene::GiSettings::default();
         settings.specular = crate::scene::SpecularSource::Rt;
         let c = Comparison {

@@ -103,16 +103,26 @@ fn a_mirror_reflects_a_lit_wall_by_its_specular_reflectance() {
     if !has_ray_queries(&ctx) {
         return;
     }
-    let s = mirror_scene();
     let wall = WALL_ALBEDO * IRRADIANCE / PI;
-    let (out, s) = render(&ctx, s);
-    let mut cone_scene = s.clone();
+    let mut cone_scene = mirror_scene();
     cone_scene.settings.gi.specular = SpecularSource::Cone;
     let (cone, _) = render(&ctx, cone_scene);
+    // Either source of the hits' indirect light: the wall has none to speak of (the mirror is
+    // black to the voxels), so both see its direct light.
+    for hit in [HitIndirect::Voxel, HitIndirect::Cones] {
+        let mut s = mirror_scene();
+        s.settings.gi.rt_hit_indirect = hit;
+        let (out, s) = render(&ctx, s);
+        assert_reflects_the_wall(&s, &out, &cone, wall);
+    }
+    assert_no_validation_messages(&ctx);
+}
+
+fn assert_reflects_the_wall(s: &Scene, out: &dvsgi::render::FrameOutput, cone: &dvsgi::render::FrameOutput, wall: f32) {
     let mut checked = 0;
     for y in 0..s.settings.height {
         for x in 0..s.settings.width {
-            let (p, c, hit) = reflection_at(&s, x, y);
+            let (p, c, hit) = reflection_at(s, x, y);
             // Mirror pixels away from its edges whose reflection lands well inside the wall.
             let inside = p.x.abs() < 0.8 && p.z.abs() < 0.8 && hit.x.abs() < 1.5 && (0.5..5.5).contains(&hit.y);
             if !inside {
@@ -125,13 +135,13 @@ fn a_mirror_reflects_a_lit_wall_by_its_specular_reflectance() {
             let err = (got - Vec3::splat(expected)).abs().max_element() / expected;
             assert!(err <= 0.02, "pixel ({x}, {y}): {got} vs {expected} ({:.1}%)", err * 100.0);
             if checked == 0 {
-                println!("rays {got}, cone {cone_got}, expected {expected} (cos {c})");
+                let hit = s.settings.gi.rt_hit_indirect;
+                println!("rays ({hit:?} at hits) {got}, cone {cone_got}, expected {expected} (cos {c})");
             }
             checked += 1;
         }
     }
     assert!(checked >= 20, "only {checked} pixels see the wall in the mirror");
-    assert_no_validation_messages(&ctx);
 }
 
 #[test]

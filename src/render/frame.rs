@@ -173,7 +173,7 @@ impl ConePasses {
                         scene_gpu,
                         &rays,
                         target,
-                        s.gi.specular_rays,
+                        (s.gi.specular_rays, s.gi.rt_hit_indirect),
                     )?,
                     scene: rays,
                 })

@@ -12,7 +12,7 @@ use crate::gpu::{
     shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuError, GpuResult, Image, Pipeline, Sampler,
 };
 use crate::render::graph::{Pass, QueueKind, Use};
-use crate::scene::Scene;
+use crate::scene::{HitIndirect, Scene};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use std::sync::Arc;
@@ -186,7 +186,7 @@ impl RtReflectPass {
         scene: &Arc<SceneGpu>,
         rays: &Arc<SceneRays>,
         target: &Arc<Image>,
-        specular_rays: u32,
+        (specular_rays, hit): (u32, HitIndirect),
     ) -> GpuResult<RtReflectPass> {
         let sampler = GBuffer::sampler(ctx)?;
         let lod0 = volumes.final_radiance().clone();
@@ -196,7 +196,8 @@ impl RtReflectPass {
             vk::ShaderStageFlags::COMPUTE,
             &Self::binds(frame, gbuffer, volumes, scene, rays, target, &sampler, &lod0),
         )?;
-        let spec = [(0, scene.materials.texture_count()), (1, specular_rays)];
+        let cones = u32::from(hit == HitIndirect::Cones);
+        let spec = [(0, scene.materials.texture_count()), (1, specular_rays), (2, cones)];
         let pipeline = Pipeline::compute(ctx, "rt reflections", shaders::RT_REFLECT_COMP, &[set.layout], 0, &spec)?;
         Ok(RtReflectPass {
             frame: frame.clone(),
@@ -250,6 +251,7 @@ impl RtReflectPass {
             materials,
             textures,
             scene.materials.lod_sampler_bind(),
+            Bind::Sampled(v.radiance.view, v.sampler.raw, ro),
         ]
     }
 }
@@ -264,6 +266,9 @@ impl Pass for RtReflectPass {
         uses.push(Use::image(&self.gbuffer.albedo, read));
         uses.push(Use::image(&self.gbuffer.specular, read));
         uses.push(Use::image(&self.lod0, read));
+        if !Arc::ptr_eq(&self.lod0, &self.volumes.radiance) {
+            uses.push(Use::image(&self.volumes.radiance, read));
+        }
         uses.extend(self.volumes.directional.iter().map(|d| Use::image(d, read)));
         uses.extend(self.volumes.pool_uses());
         uses.extend(self.volumes.brick_map_uses(Access::ComputeShaderReadStorage));
