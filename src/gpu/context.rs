@@ -210,6 +210,77 @@ fn cstr_field(bytes: &[std::ffi::c_char]) -> String {
     String::from_utf8_lossy(&bytes).into_owned()
 }
 
+/// The instance, with the validation layer (and synchronization validation) when asked, and
+/// whether VK_EXT_debug_utils is there (object names, labels, the validation messenger).
+fn create_instance(entry: &ash::Entry, validation: bool) -> GpuResult<(ash::Instance, bool)> {
+    let app_name = c"dvsgi";
+    let app = vk::ApplicationInfo::default()
+        .application_name(app_name)
+        .engine_name(app_name)
+        .api_version(vk::API_VERSION_1_3);
+    let layer_props =
+        unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
+    let has_layer = layer_props.iter().any(|l| l.layer_name_as_c_str().map(|n| n == VALIDATION_LAYER).unwrap_or(false));
+    if validation && !has_layer {
+        return Err(GpuError::NoValidationLayer);
+    }
+    let ext_props =
+        unsafe { entry.enumerate_instance_extension_properties(None) }.vk("vkEnumerateInstanceExtensionProperties")?;
+    let has_debug_utils = ext_props
+        .iter()
+        .any(|e| e.extension_name_as_c_str().map(|n| n == ash::ext::debug_utils::NAME).unwrap_or(false));
+    let mut layers: Vec<*const std::ffi::c_char> = Vec::new();
+    let mut extensions: Vec<*const std::ffi::c_char> = Vec::new();
+    if validation {
+        layers.push(VALIDATION_LAYER.as_ptr());
+    }
+    if has_debug_utils {
+        extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+    }
+    let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+    let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
+    let mut ici = vk::InstanceCreateInfo::default()
+        .application_info(&app)
+        .enabled_layer_names(&layers)
+        .enabled_extension_names(&extensions);
+    if validation {
+        ici = ici.push_next(&mut features);
+    }
+    let instance = unsafe { entry.create_instance(&ici, None) }.map_err(|e| match e {
+        vk::Result::ERROR_INCOMPATIBLE_DRIVER => {
+            GpuError::NoDevice("the Vulkan loader found no driver (VK_ERROR_INCOMPATIBLE_DRIVER)".into())
+        }
+        result => GpuError::Vk { call: "vkCreateInstance", result },
+    })?;
+    Ok((instance, has_debug_utils))
+}
+
+/// The messenger that counts validation errors and warnings into `counts` (and prints them).
+fn create_messenger(
+    entry: &ash::Entry,
+    instance: &ash::Instance,
+    counts: &ValidationCounts,
+) -> GpuResult<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)> {
+    let di = ash::ext::debug_utils::Instance::new(entry, instance);
+    let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+        .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING)
+        .message_type(
+            vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+        )
+        .pfn_user_callback(Some(debug_callback))
+        .user_data(counts as *const ValidationCounts as *mut c_void);
+    let m = unsafe { di.create_debug_utils_messenger(&info, None) }.vk("vkCreateDebugUtilsMessengerEXT");
+    match m {
+        Ok(m) => Ok((di, m)),
+        Err(e) => {
+            unsafe { instance.destroy_instance(None) };
+            Err(e)
+        }
+    }
+}
+
 /// The queues dvsgi asks for: a graphics+compute queue, and a separate compute queue where
 /// the device has one (a compute-only family first, else a second queue of the graphics family).
 struct QueuePlan {
@@ -381,67 +452,13 @@ impl Context {
         let device_req = desc.device.clone().or_else(|| std::env::var("DVSGI_DEVICE").ok());
         let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::Loader(e.to_string()))?;
 
-        // Instance.
-        let app_name = c"dvsgi";
-        let app = vk::ApplicationInfo::default()
-            .application_name(app_name)
-            .engine_name(app_name)
-            .api_version(vk::API_VERSION_1_3);
-        let layer_props =
-            unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
-        let has_layer =
-            layer_props.iter().any(|l| l.layer_name_as_c_str().map(|n| n == VALIDATION_LAYER).unwrap_or(false));
-        if validation && !has_layer {
-            return Err(GpuError::NoValidationLayer);
-        }
-        let ext_props = unsafe { entry.enumerate_instance_extension_properties(None) }
-            .vk("vkEnumerateInstanceExtensionProperties")?;
-        let has_debug_utils = ext_props
-            .iter()
-            .any(|e| e.extension_name_as_c_str().map(|n| n == ash::ext::debug_utils::NAME).unwrap_or(false));
-        let mut layers: Vec<*const std::ffi::c_char> = Vec::new();
-        let mut extensions: Vec<*const std::ffi::c_char> = Vec::new();
-        if validation {
-            layers.push(VALIDATION_LAYER.as_ptr());
-        }
-        if has_debug_utils {
-            extensions.push(ash::ext::debug_utils::NAME.as_ptr());
-        }
-        let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
-        let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
-        let mut ici = vk::InstanceCreateInfo::default()
-            .application_info(&app)
-            .enabled_layer_names(&layers)
-            .enabled_extension_names(&extensions);
-        if validation {
-            ici = ici.push_next(&mut features);
-        }
-        let instance = unsafe { entry.create_instance(&ici, None) }.map_err(|e| match e {
-            vk::Result::ERROR_INCOMPATIBLE_DRIVER => {
-                GpuError::NoDevice("the Vulkan loader found no driver (VK_ERROR_INCOMPATIBLE_DRIVER)".into())
-            }
-            result => GpuError::Vk { call: "vkCreateInstance", result },
-        })?;
-
+        let (instance, has_debug_utils) = create_instance(&entry, validation)?;
         let counts = Box::new(ValidationCounts::default());
-        let (debug_instance, messenger) = if has_debug_utils && validation {
-            let di = ash::ext::debug_utils::Instance::new(&entry, &instance);
-            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-                .message_severity(
-                    vk::DebugUtilsMessageSeverityFlagsEXT::ERROR | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
-                )
-                .message_type(
-                    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
-                        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
-                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
-                )
-                .pfn_user_callback(Some(debug_callback))
-                .user_data(&*counts as *const ValidationCounts as *mut c_void);
-            let m = unsafe { di.create_debug_utils_messenger(&info, None) }.vk("vkCreateDebugUtilsMessengerEXT")?;
-            (Some(di), m)
-        } else {
-            (None, vk::DebugUtilsMessengerEXT::null())
-        };
+        let (debug_instance, messenger) =
+            match (has_debug_utils && validation).then(|| create_messenger(&entry, &instance, &counts)).transpose()? {
+                Some((di, m)) => (Some(di), m),
+                None => (None, vk::DebugUtilsMessengerEXT::null()),
+            };
 
         // From here on, destroy the instance on error.
         let cleanup = |e: GpuError| {
@@ -454,17 +471,15 @@ impl Context {
             e
         };
 
-        let candidates = Self::candidates(&instance).map_err(cleanup)?;
-        let chosen = match Self::choose(&candidates, device_req.as_deref()) {
-            Ok(c) => c,
+        let (physical, chosen) = match Self::pick(&instance, device_req.as_deref()) {
+            Ok(p) => p,
             Err(e) => return Err(cleanup(e)),
         };
-        let physical =
-            unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices").map_err(cleanup)?[chosen];
         let result =
             Self::create_device(entry.clone(), instance.clone(), physical, chosen, validation, has_debug_utils);
         match result {
             Ok((device, debug_utils, gq, cq, topology, info)) => {
+                // Buffer device addresses are on where ray queries are (acceleration structures).
                 let allocator = Allocator::new(&AllocatorCreateDesc {
                     instance: instance.clone(),
                     device: device.clone(),
@@ -474,17 +489,12 @@ impl Context {
                     allocation_sizes: Default::default(),
                 })
                 .map_err(|e| GpuError::Alloc { name: "allocator".into(), bytes: 0, source: e });
-                let allocator = match allocator {
-                    Ok(a) => a,
-                    Err(e) => {
-                        unsafe { device.destroy_device(None) };
-                        return Err(cleanup(e));
-                    }
-                };
-                let timeout = match env_timeout() {
-                    Ok(t) => t.unwrap_or(if info.is_cpu() { CPU_DEVICE_TIMEOUT } else { GPU_TIMEOUT }),
-                    Err(e) => {
-                        drop(allocator);
+                let timeout =
+                    env_timeout().map(|t| t.unwrap_or(if info.is_cpu() { CPU_DEVICE_TIMEOUT } else { GPU_TIMEOUT }));
+                let (allocator, timeout) = match (allocator, timeout) {
+                    (Ok(a), Ok(t)) => (a, t),
+                    (a, t) => {
+                        let e = t.err().or(a.err()).expect("one failed");
                         unsafe { device.destroy_device(None) };
                         return Err(cleanup(e));
                     }
@@ -511,14 +521,25 @@ impl Context {
                     timeout_ns: AtomicU64::new(timeout.as_nanos() as u64),
                     failed: AtomicBool::new(false),
                 };
-                ctx.name_object(ctx.graphics_queue.raw, "graphics queue");
-                if ctx.topology != QueueTopology::SingleQueue {
-                    ctx.name_object(ctx.compute_queue.raw, "compute queue");
-                }
+                ctx.name_queues();
                 Ok(std::sync::Arc::new(ctx))
             }
             Err(e) => Err(cleanup(e)),
         }
+    }
+
+    fn name_queues(&self) {
+        self.name_object(self.graphics_queue.raw, "graphics queue");
+        if self.topology != QueueTopology::SingleQueue {
+            self.name_object(self.compute_queue.raw, "compute queue");
+        }
+    }
+
+    /// The physical device `request` names (else the best usable one) and its index.
+    fn pick(instance: &ash::Instance, request: Option<&str>) -> GpuResult<(vk::PhysicalDevice, usize)> {
+        let chosen = Self::choose(&Self::candidates(instance)?, request)?;
+        let devices = unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
+        Ok((devices[chosen], chosen))
     }
 
     /// Every physical device with the reason it cannot be used, if any.

@@ -74,22 +74,13 @@ impl DescriptorSet {
         }
         .vk("vkCreateDescriptorSetLayout")?;
         ctx.name_object(layout, &format!("{name} layout"));
-        let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
-        for b in binds {
-            match sizes.iter_mut().find(|s| s.ty == b.ty()) {
-                Some(s) => s.descriptor_count += b.count(),
-                None => sizes.push(vk::DescriptorPoolSize { ty: b.ty(), descriptor_count: b.count() }),
-            }
-        }
         let mut me = DescriptorSet {
             ctx: ctx.clone(),
             layout,
             pool: vk::DescriptorPool::null(),
             set: vk::DescriptorSet::null(),
         };
-        if sizes.is_empty() {
-            sizes.push(vk::DescriptorPoolSize { ty: vk::DescriptorType::UNIFORM_BUFFER, descriptor_count: 1 });
-        }
+        let sizes = pool_sizes(binds);
         me.pool = unsafe {
             d.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes), None)
         }
@@ -103,65 +94,31 @@ impl DescriptorSet {
         }
         .vk("vkAllocateDescriptorSets")?[0];
         ctx.name_object(me.set, name);
+        me.write_resources(binds);
+        me.write_acceleration_structures(binds);
+        Ok(me)
+    }
 
+    /// Buffer and image descriptors, one write per binding.
+    fn write_resources(&self, binds: &[Bind]) {
         // Keep the info arrays alive until the update call.
-        let mut buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = Vec::new();
-        let mut image_infos: Vec<Vec<vk::DescriptorImageInfo>> = Vec::new();
-        for b in binds {
-            match b {
+        let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = binds
+            .iter()
+            .filter_map(|b| match b {
                 Bind::Uniform(buf) | Bind::Storage(buf) => {
-                    buffer_infos.push([vk::DescriptorBufferInfo { buffer: buf.raw, offset: 0, range: vk::WHOLE_SIZE }])
+                    Some([vk::DescriptorBufferInfo { buffer: buf.raw, offset: 0, range: vk::WHOLE_SIZE }])
                 }
-                Bind::Sampled(view, sampler, layout) => image_infos.push(vec![vk::DescriptorImageInfo {
-                    sampler: *sampler,
-                    image_view: *view,
-                    image_layout: *layout,
-                }]),
-                Bind::SampledArray(views, sampler, layout) => image_infos.push(
-                    views
-                        .iter()
-                        .map(|v| vk::DescriptorImageInfo { sampler: *sampler, image_view: *v, image_layout: *layout })
-                        .collect(),
-                ),
-                Bind::ImageArray(views, layout) => image_infos.push(
-                    views
-                        .iter()
-                        .map(|v| vk::DescriptorImageInfo {
-                            sampler: vk::Sampler::null(),
-                            image_view: *v,
-                            image_layout: *layout,
-                        })
-                        .collect(),
-                ),
-                Bind::Sampler(sampler) => image_infos.push(vec![vk::DescriptorImageInfo {
-                    sampler: *sampler,
-                    image_view: vk::ImageView::null(),
-                    image_layout: vk::ImageLayout::UNDEFINED,
-                }]),
-                Bind::StorageImage(view) => image_infos.push(vec![vk::DescriptorImageInfo {
-                    sampler: vk::Sampler::null(),
-                    image_view: *view,
-                    image_layout: vk::ImageLayout::GENERAL,
-                }]),
-                Bind::StorageImageArray(views) => image_infos.push(
-                    views
-                        .iter()
-                        .map(|v| vk::DescriptorImageInfo {
-                            sampler: vk::Sampler::null(),
-                            image_view: *v,
-                            image_layout: vk::ImageLayout::GENERAL,
-                        })
-                        .collect(),
-                ),
-                Bind::AccelerationStructure(_) => {}
-            }
-        }
+                _ => None,
+            })
+            .collect();
+        let image_infos: Vec<Vec<vk::DescriptorImageInfo>> = binds.iter().filter_map(image_infos).collect();
         let (mut bi, mut ii) = (0, 0);
         let writes: Vec<_> = binds
             .iter()
             .enumerate()
             .filter_map(|(i, b)| {
-                let w = vk::WriteDescriptorSet::default().dst_set(me.set).dst_binding(i as u32).descriptor_type(b.ty());
+                let w =
+                    vk::WriteDescriptorSet::default().dst_set(self.set).dst_binding(i as u32).descriptor_type(b.ty());
                 match b {
                     Bind::Uniform(_) | Bind::Storage(_) => {
                         bi += 1;
@@ -175,9 +132,7 @@ impl DescriptorSet {
                 }
             })
             .collect();
-        unsafe { d.update_descriptor_sets(&writes, &[]) };
-        me.write_acceleration_structures(binds);
-        Ok(me)
+        unsafe { self.ctx.device.update_descriptor_sets(&writes, &[]) };
     }
 
     /// Acceleration-structure descriptors (their write chains a structure of its own).
@@ -197,6 +152,37 @@ impl DescriptorSet {
             }
         }
     }
+}
+
+/// One pool size per descriptor type the bindings use (at least one entry).
+fn pool_sizes(binds: &[Bind]) -> Vec<vk::DescriptorPoolSize> {
+    let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
+    for b in binds {
+        match sizes.iter_mut().find(|s| s.ty == b.ty()) {
+            Some(s) => s.descriptor_count += b.count(),
+            None => sizes.push(vk::DescriptorPoolSize { ty: b.ty(), descriptor_count: b.count() }),
+        }
+    }
+    if sizes.is_empty() {
+        sizes.push(vk::DescriptorPoolSize { ty: vk::DescriptorType::UNIFORM_BUFFER, descriptor_count: 1 });
+    }
+    sizes
+}
+
+/// The image infos of an image, image-array or sampler binding (None for the others).
+fn image_infos(b: &Bind) -> Option<Vec<vk::DescriptorImageInfo>> {
+    let info = |sampler, image_view, image_layout| vk::DescriptorImageInfo { sampler, image_view, image_layout };
+    let none = vk::Sampler::null();
+    let general = vk::ImageLayout::GENERAL;
+    Some(match b {
+        Bind::Sampled(view, sampler, layout) => vec![info(*sampler, *view, *layout)],
+        Bind::SampledArray(views, sampler, layout) => views.iter().map(|v| info(*sampler, *v, *layout)).collect(),
+        Bind::ImageArray(views, layout) => views.iter().map(|v| info(none, *v, *layout)).collect(),
+        Bind::Sampler(sampler) => vec![info(*sampler, vk::ImageView::null(), vk::ImageLayout::UNDEFINED)],
+        Bind::StorageImage(view) => vec![info(none, *view, general)],
+        Bind::StorageImageArray(views) => views.iter().map(|v| info(none, *v, general)).collect(),
+        Bind::Uniform(_) | Bind::Storage(_) | Bind::AccelerationStructure(_) => return None,
+    })
 }
 
 impl Drop for DescriptorSet {

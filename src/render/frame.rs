@@ -25,7 +25,7 @@ use super::scene_gpu::SceneGpu;
 use super::voxel::VoxelVolumes;
 use super::FrameBuffers;
 use crate::gpu::{Buffer, Context, GpuResult, Image, ImageDesc};
-use crate::scene::{DirectShadows, GiMode, Scene, SpecularSource, View, VoxelOcclusion};
+use crate::scene::{DirectShadows, GiMode, RenderSettings, Scene, SpecularSource, View, VoxelOcclusion};
 use ash::vk;
 use std::sync::Arc;
 
@@ -45,6 +45,60 @@ pub struct VoxelPasses {
     pub mips: Option<VoxelMipPass>,
     /// Only with bounces.
     pub bounces: Option<BouncePasses>,
+}
+
+impl VoxelPasses {
+    /// Voxelization (static, dynamic, bricks), the voxels' light, their mips and bounces.
+    fn new(
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        scene_gpu: &Arc<SceneGpu>,
+        frame: &FrameBuffers,
+        atlas: &Arc<Image>,
+    ) -> GpuResult<VoxelPasses> {
+        let s = &scene.settings;
+        let volumes = Arc::new(VoxelVolumes::new(ctx, scene)?);
+        let voxelizer = Voxelizer::new(ctx, scene_gpu, frame, &volumes)?;
+        let keeper = ListKeeper::new(ctx, &volumes)?;
+        let dynamic = if volumes.needs.dynamic {
+            Some(DynamicPasses {
+                clear: DynamicClearPass::new(ctx, &volumes, &keeper)?,
+                bricks: BrickPasses::new(ctx, &voxelizer, &volumes, true)?,
+                voxelize: VoxelizePass::new(&voxelizer, true),
+                list: VoxelListPass::new(&keeper, ListStep::Dynamic),
+            })
+        } else {
+            None
+        };
+        let (mips, bounces) = if volumes.needs.cones {
+            let shared = VoxelMips::new(ctx, &volumes)?;
+            let bounces = if volumes.needs.bounces > 0 {
+                let bounced = &volumes.bounced[0];
+                Some(BouncePasses {
+                    from_direct: VoxelBouncePass::new(ctx, frame, &volumes, &volumes.radiance)?,
+                    from_bounced: VoxelBouncePass::new(ctx, frame, &volumes, bounced)?,
+                    compose: BounceComposePass::new(ctx, &volumes)?,
+                    mips: VoxelMipPass::new(ctx, &shared, &volumes, bounced)?,
+                })
+            } else {
+                None
+            };
+            (Some(VoxelMipPass::new(ctx, &shared, &volumes, &volumes.radiance)?), bounces)
+        } else {
+            (None, None)
+        };
+        Ok(VoxelPasses {
+            light: VoxelLightPass::new(ctx, frame, &volumes, atlas, &s.gi)?,
+            clear: VoxelClearPass::new(&volumes),
+            bricks_static: BrickPasses::new(ctx, &voxelizer, &volumes, false)?,
+            voxelize_static: VoxelizePass::new(&voxelizer, false),
+            list_static: VoxelListPass::new(&keeper, ListStep::Static),
+            dynamic,
+            mips,
+            bounces,
+            volumes,
+        })
+    }
 }
 
 /// Revoxelizing the dynamic objects: empty their voxels (the list's dynamic range), voxelize
@@ -434,81 +488,12 @@ impl FramePasses {
         let s = &scene.settings;
         let (width, height) = s.internal_size();
         let gbuffer = Arc::new(GBuffer::new(ctx, width, height)?);
-        // Without shadowed lights the lighting pass still binds a 1x1 placeholder map.
-        let (atlas_size, atlas_layers) = if shadow_views > 0 { (s.shadow_map_size, shadow_views) } else { (1, 1) };
-        let atlas = Arc::new(Image::new(
-            ctx,
-            if shadow_views > 0 { "shadow maps" } else { "shadow map placeholder" },
-            ImageDesc::d2_array(
-                SHADOW_FORMAT,
-                atlas_size,
-                atlas_size,
-                atlas_layers,
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
-                    | vk::ImageUsageFlags::SAMPLED
-                    | vk::ImageUsageFlags::TRANSFER_SRC,
-            ),
-        )?);
-        let sized = |name: &str, format, (width, height)| {
-            Image::new(
-                ctx,
-                name,
-                ImageDesc::d2(format, width, height, vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC),
-            )
-            .map(Arc::new)
-        };
-        let radiance = sized("radiance", RADIANCE_FORMAT, (width, height))?;
-        let display = sized("display", DISPLAY_FORMAT, (s.width, s.height))?;
-        let resolve = if s.supersample > 1 {
-            let resolved = sized("resolved radiance", RADIANCE_FORMAT, (s.width, s.height))?;
-            Some(ResolvePass::new(ctx, &radiance, &resolved, s.supersample)?)
-        } else {
-            None
-        };
+        let atlas = shadow_atlas(ctx, s.shadow_map_size, shadow_views)?;
+        let (radiance, display, resolve) = output_images(ctx, s)?;
         let shown = resolve.as_ref().map_or(&radiance, |r| &r.resolved).clone();
         let voxel_view = !matches!(s.view, View::Final | View::Indirect | View::Ao);
         let voxels = if s.gi.mode == GiMode::Vct || voxel_view {
-            let volumes = Arc::new(VoxelVolumes::new(ctx, scene)?);
-            let voxelizer = Voxelizer::new(ctx, scene_gpu, frame, &volumes)?;
-            let keeper = ListKeeper::new(ctx, &volumes)?;
-            let dynamic = if volumes.needs.dynamic {
-                Some(DynamicPasses {
-                    clear: DynamicClearPass::new(ctx, &volumes, &keeper)?,
-                    bricks: BrickPasses::new(ctx, &voxelizer, &volumes, true)?,
-                    voxelize: VoxelizePass::new(&voxelizer, true),
-                    list: VoxelListPass::new(&keeper, ListStep::Dynamic),
-                })
-            } else {
-                None
-            };
-            let (mips, bounces) = if volumes.needs.cones {
-                let shared = VoxelMips::new(ctx, &volumes)?;
-                let bounces = if volumes.needs.bounces > 0 {
-                    let bounced = &volumes.bounced[0];
-                    Some(BouncePasses {
-                        from_direct: VoxelBouncePass::new(ctx, frame, &volumes, &volumes.radiance)?,
-                        from_bounced: VoxelBouncePass::new(ctx, frame, &volumes, bounced)?,
-                        compose: BounceComposePass::new(ctx, &volumes)?,
-                        mips: VoxelMipPass::new(ctx, &shared, &volumes, bounced)?,
-                    })
-                } else {
-                    None
-                };
-                (Some(VoxelMipPass::new(ctx, &shared, &volumes, &volumes.radiance)?), bounces)
-            } else {
-                (None, None)
-            };
-            Some(VoxelPasses {
-                light: VoxelLightPass::new(ctx, frame, &volumes, &atlas, &s.gi)?,
-                clear: VoxelClearPass::new(&volumes),
-                bricks_static: BrickPasses::new(ctx, &voxelizer, &volumes, false)?,
-                voxelize_static: VoxelizePass::new(&voxelizer, false),
-                list_static: VoxelListPass::new(&keeper, ListStep::Static),
-                dynamic,
-                mips,
-                bounces,
-                volumes,
-            })
+            Some(VoxelPasses::new(ctx, scene, scene_gpu, frame, &atlas)?)
         } else {
             None
         };
@@ -539,42 +524,21 @@ impl FramePasses {
             (Some(v), _) if voxel_view => {
                 Shading::VoxelView(VoxelViewPass::new(ctx, frame, &v.volumes, s.view, &radiance)?)
             }
-            _ => {
-                let cone_inputs = cones.as_ref().map(|c| GiInputs {
-                    targets: c.output(),
-                    cone_shadows: c.low.shadow.is_some(),
-                    rt_specular: c.rays.is_some(),
-                });
-                let rsm_inputs =
-                    rsm.as_ref().map(|r| GiInputs { targets: r.targets(), cone_shadows: false, rt_specular: false });
-                let gi = cone_inputs.or(rsm_inputs);
-                let output = match s.view {
-                    View::Indirect => LightingOutput::IndirectOnly,
-                    View::Ao => LightingOutput::AmbientOcclusion,
-                    _ => LightingOutput::Final,
-                };
-                Shading::Lighting(LightingPass::new(
-                    ctx,
-                    frame,
-                    &gbuffer,
-                    &atlas,
-                    &radiance,
-                    gi,
-                    &placeholders,
-                    output,
-                )?)
-            }
+            _ => Shading::Lighting(LightingPass::new(
+                ctx,
+                frame,
+                &gbuffer,
+                &atlas,
+                &radiance,
+                gi_inputs(cones.as_ref(), rsm.as_ref()),
+                &placeholders,
+                LightingOutput::of(s.view),
+            )?),
         };
         let shadow =
             if shadow_views > 0 { Some(ShadowPass::new(ctx, scene_gpu, frame, &atlas, shadow_views)?) } else { None };
-        let mut uploads =
-            vec![frame.uniforms.clone(), frame.lights.clone(), frame.shadow_views.clone(), scene_gpu.instances.clone()];
-        if let Some(r) = cones.as_ref().and_then(|c| c.rays.as_ref()).filter(|r| r.build.is_some()) {
-            uploads.push(r.scene.top.instances.clone());
-        }
-        let upload = UploadPass::new(uploads);
         Ok(FramePasses {
-            upload,
+            upload: frame_upload(frame, scene_gpu, cones.as_ref()),
             voxels,
             shadow,
             gbuffer: GBufferPass::new(ctx, scene_gpu, frame, &gbuffer)?,
@@ -584,19 +548,12 @@ impl FramePasses {
             tonemap: TonemapPass::new(ctx, frame, &shown, &display)?,
             resolve,
             readback: None,
-            targets: vec![
-                gbuffer.depth.clone(),
-                gbuffer.albedo.clone(),
-                gbuffer.normal.clone(),
-                gbuffer.specular.clone(),
-                gbuffer.emission.clone(),
-                atlas.clone(),
-                radiance.clone(),
-                display.clone(),
-            ]
-            .into_iter()
-            .chain((!Arc::ptr_eq(&shown, &radiance)).then_some(shown.clone()))
-            .collect(),
+            targets: [&gbuffer.depth, &gbuffer.albedo, &gbuffer.normal, &gbuffer.specular, &gbuffer.emission]
+                .into_iter()
+                .chain([&atlas, &radiance, &display])
+                .chain((!Arc::ptr_eq(&shown, &radiance)).then_some(&shown))
+                .cloned()
+                .collect(),
         })
     }
 
@@ -640,6 +597,27 @@ impl FramePasses {
         self.rays().and_then(|r| r.build.as_ref())
     }
 
+    /// The voxels' light for this update: direct light, mips, then each bounce and its mips.
+    fn voxel_lighting(&self, state: FrameState) -> Vec<&dyn Pass> {
+        let mut voxel_lighting: Vec<&dyn Pass> = Vec::new();
+        let Some(v) = &self.voxels else { return voxel_lighting };
+        voxel_lighting.push(&v.light);
+        let feed_back = state.feed_back && v.bounces.is_some();
+        // Feedback gathers through the mips of the previous bounced radiance, still in
+        // the directional volumes.
+        if let (false, Some(mips)) = (feed_back, &v.mips) {
+            voxel_lighting.push(mips);
+        }
+        if let Some(b) = &v.bounces {
+            for i in 0..state.bounces {
+                voxel_lighting.push(if i == 0 && !feed_back { &b.from_direct } else { &b.from_bounced });
+                voxel_lighting.push(&b.compose);
+                voxel_lighting.push(&b.mips);
+            }
+        }
+        voxel_lighting
+    }
+
     /// The frame, in dependency order. Every schedule mode runs this list; the scheduler
     /// only decides which queue each pass goes to.
     pub fn list(&self, state: FrameState) -> Vec<&dyn Pass> {
@@ -673,23 +651,7 @@ impl FramePasses {
             passes.push(&r.render);
         }
         // The voxel illumination chain: direct light, mips, bounces (each with its mips).
-        let mut voxel_lighting: Vec<&dyn Pass> = Vec::new();
-        if let (true, Some(v)) = (relight, &self.voxels) {
-            voxel_lighting.push(&v.light);
-            let feed_back = state.feed_back && v.bounces.is_some();
-            // Feedback gathers through the mips of the previous bounced radiance, still in
-            // the directional volumes.
-            if let (false, Some(mips)) = (feed_back, &v.mips) {
-                voxel_lighting.push(mips);
-            }
-            if let Some(b) = &v.bounces {
-                for i in 0..state.bounces {
-                    voxel_lighting.push(if i == 0 && !feed_back { &b.from_direct } else { &b.from_bounced });
-                    voxel_lighting.push(&b.compose);
-                    voxel_lighting.push(&b.mips);
-                }
-            }
-        }
+        let mut voxel_lighting = if relight { self.voxel_lighting(state) } else { Vec::new() };
         // Lagged: this frame's cones read the radiance of the previous update, and the new
         // radiance is computed after them (overlapping the rest of the frame's graphics work).
         let lagged = state.lagged && state.static_voxelized && self.cones.is_some();
@@ -726,6 +688,57 @@ impl FramePasses {
         passes.append(&mut voxel_lighting);
         passes
     }
+}
+
+/// The radiance the frame shades (at the internal size), the display image, and with
+/// supersampling the pass that resolves the one into the output size.
+fn output_images(ctx: &Arc<Context>, s: &RenderSettings) -> GpuResult<(Arc<Image>, Arc<Image>, Option<ResolvePass>)> {
+    let sized = |name: &str, format, (width, height)| {
+        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+        Image::new(ctx, name, ImageDesc::d2(format, width, height, usage)).map(Arc::new)
+    };
+    let radiance = sized("radiance", RADIANCE_FORMAT, s.internal_size())?;
+    let display = sized("display", DISPLAY_FORMAT, (s.width, s.height))?;
+    let resolve = if s.supersample > 1 {
+        let resolved = sized("resolved radiance", RADIANCE_FORMAT, (s.width, s.height))?;
+        Some(ResolvePass::new(ctx, &radiance, &resolved, s.supersample)?)
+    } else {
+        None
+    };
+    Ok((radiance, display, resolve))
+}
+
+/// The frame's host data: uniforms, lights, shadow views, instances, and the top level's
+/// instances where reflections are ray traced among moving objects.
+fn frame_upload(frame: &FrameBuffers, scene_gpu: &SceneGpu, cones: Option<&ConePasses>) -> UploadPass {
+    let mut uploads =
+        vec![frame.uniforms.clone(), frame.lights.clone(), frame.shadow_views.clone(), scene_gpu.instances.clone()];
+    if let Some(r) = cones.and_then(|c| c.rays.as_ref()).filter(|r| r.build.is_some()) {
+        uploads.push(r.scene.top.instances.clone());
+    }
+    UploadPass::new(uploads)
+}
+
+/// The shadow maps of `views` views of `size`² texels, one layer each. Without shadowed lights
+/// the lighting pass still binds a 1x1 placeholder map.
+fn shadow_atlas(ctx: &Arc<Context>, size: u32, views: u32) -> GpuResult<Arc<Image>> {
+    let (size, layers) = if views > 0 { (size, views) } else { (1, 1) };
+    let usage = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+        | vk::ImageUsageFlags::SAMPLED
+        | vk::ImageUsageFlags::TRANSFER_SRC;
+    let name = if views > 0 { "shadow maps" } else { "shadow map placeholder" };
+    Image::new(ctx, name, ImageDesc::d2_array(SHADOW_FORMAT, size, size, layers, usage)).map(Arc::new)
+}
+
+/// The indirect light the lighting pass composes: the traced cones (and rays), else the RSM
+/// gather, else none.
+fn gi_inputs<'a>(cones: Option<&'a ConePasses>, rsm: Option<&'a RsmPasses>) -> Option<GiInputs<'a>> {
+    let cone_inputs = cones.map(|c| GiInputs {
+        targets: c.output(),
+        cone_shadows: c.low.shadow.is_some(),
+        rt_specular: c.rays.is_some(),
+    });
+    cone_inputs.or(rsm.map(|r| GiInputs { targets: r.targets(), cone_shadows: false, rt_specular: false }))
 }
 
 /// Direct light is shadowed by cones (`gi.shadows = "cone"`, cones traced per pixel).

@@ -29,6 +29,17 @@ pub enum LightingOutput {
     AmbientOcclusion = 2,
 }
 
+impl LightingOutput {
+    /// What `render.view` asks the lighting pass for.
+    pub fn of(view: crate::scene::View) -> LightingOutput {
+        match view {
+            crate::scene::View::Indirect => LightingOutput::IndirectOnly,
+            crate::scene::View::Ao => LightingOutput::AmbientOcclusion,
+            _ => LightingOutput::Final,
+        }
+    }
+}
+
 /// The cone-traced inputs of the composite.
 pub struct GiInputs<'a> {
     pub targets: &'a GiTargets,
