@@ -919,8 +919,7 @@ mod tests {
         let hit = Grid::parse(&["rt_hit_indirect=cones,voxel".into()]).unwrap().configs();
         assert_eq!(hit[0].overrides(), vec![("gi.rt_hit_indirect".to_string(), "\"cones\"".to_string())]);
         assert_eq!(hit[1].label(), "hit-voxel");
-        let mut settings = crate::scene::GiSettings::default();
-        settings.specular = crate::scene::SpecularSource::Rt;
+        let settings = crate::scene::GiSettings { specular: crate::scene::SpecularSource::Rt, ..Default::default() };
         let c = Comparison {
             rmse: 0.1,
             relmse: 0.1,

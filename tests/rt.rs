@@ -275,3 +275,19 @@ fn rt_needs_ray_queries_and_says_so() {
     }
     assert_no_validation_messages(&ctx);
 }
+
+#[test]
+fn an_empty_top_level_builds_without_error() {
+    let ctx = context();
+    if !has_ray_queries(&ctx) {
+        return;
+    }
+    // No instances at all: the build and the structure are valid, and a ray query through it
+    // finds nothing (the renderer never makes one: a scene without a glossy surface traces no
+    // reflections, and the mirror itself is an instance).
+    let top = dvsgi::gpu::accel::TopLevel::new(&ctx, "empty top level", 0).expect("top level");
+    ctx.one_shot("build an empty top level", |cmd| top.record_build(&ctx, cmd)).expect("build");
+    assert_eq!(top.count, 0);
+    drop(top);
+    assert_no_validation_messages(&ctx);
+}
