@@ -13,21 +13,6 @@ use glam::{Mat4, Vec2, Vec3};
 use std::f32::consts::PI;
 use std::path::PathBuf;
 
-/// A quad with corners `p` (counter-clockwise seen from `normal`) and top-down UVs `uv`.
-fn quad(name: &str, p: [Vec3; 4], uv: [Vec2; 4], normal: Vec3, material: u32) -> Mesh {
-    let mut bounds = Aabb::EMPTY;
-    p.iter().for_each(|q| bounds.grow(*q));
-    Mesh {
-        name: name.into(),
-        positions: p.to_vec(),
-        normals: vec![normal; 4],
-        uvs: uv.to_vec(),
-        indices: vec![0, 1, 2, 0, 2, 3],
-        material,
-        bounds,
-    }
-}
-
 fn material(name: &str, albedo: Vec3) -> Material {
     Material::diffuse(name, albedo)
 }
@@ -100,8 +85,8 @@ fn trace(scene: &Scene, spp: u32, jitter: bool) -> ReferenceImage {
 fn masked_quad_scene() -> Scene {
     let v = Vec3::new;
     let uv = [Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)];
-    let floor = quad("floor", [v(-3., 0., 3.), v(3., 0., 3.), v(3., 0., -3.), v(-3., 0., -3.)], uv, Vec3::Y, 0);
-    let leaf = quad("leaf", [v(-1., 1., 1.), v(1., 1., 1.), v(1., 1., -1.), v(-1., 1., -1.)], uv, Vec3::Y, 1);
+    let floor = uv_quad("floor", [v(-3., 0., 3.), v(3., 0., 3.), v(3., 0., -3.), v(-3., 0., -3.)], uv, Vec3::Y, 0);
+    let leaf = uv_quad("leaf", [v(-1., 1., 1.), v(1., 1., 1.), v(1., 1., -1.), v(-1., 1., -1.)], uv, Vec3::Y, 1);
     let mut red = material("leaf", v(0.8, 0.1, 0.1));
     red.mask_texture = Some(0);
     // Greyscale coverage (as Crytek's masks): opaque where u < 0.5.
@@ -254,7 +239,7 @@ impl Field {
 fn bumped_square(map: Texture, scale: f32, sun_direction: Vec3) -> Scene {
     let v = Vec3::new;
     let uv = [Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)];
-    let square = quad("square", [v(-1., -1., 0.), v(1., -1., 0.), v(1., 1., 0.), v(-1., 1., 0.)], uv, Vec3::Z, 0);
+    let square = uv_quad("square", [v(-1., -1., 0.), v(1., -1., 0.), v(1., 1., 0.), v(-1., 1., 0.)], uv, Vec3::Z, 0);
     let mut m = material("bumped", Vec3::splat(0.8));
     m.normal_texture = Some(0);
     m.bump_scale = scale;
@@ -461,7 +446,7 @@ fn light_from_behind_the_geometric_surface_is_blocked_in_both_renderers() {
     let v = Vec3::new;
     let uv = [Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)];
     let lean = v(-0.7, 0.0, 0.7).normalize();
-    let square = quad("square", [v(-1., -1., 0.), v(1., -1., 0.), v(1., 1., 0.), v(-1., 1., 0.)], uv, lean, 0);
+    let square = uv_quad("square", [v(-1., -1., 0.), v(1., -1., 0.), v(1., 1., 0.), v(-1., 1., 0.)], uv, lean, 0);
     let camera =
         Camera { position: v(0., 0., 3.), target: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 45.0, near: 0.1, far: 10.0 };
     // Travelling along +x and +z: it comes from -x, below the square (z < 0).

@@ -18,21 +18,6 @@ const SHININESS: f32 = 1000.0;
 const WALL_ALBEDO: f32 = 0.8;
 const IRRADIANCE: f32 = 2.0;
 
-/// A quad with corners `p` (counter-clockwise seen from `normal`) and UVs `uv`.
-fn quad_mesh(name: &str, p: [Vec3; 4], uv: [Vec2; 4], normal: Vec3, material: u32) -> Mesh {
-    let mut bounds = Aabb::EMPTY;
-    p.iter().for_each(|q| bounds.grow(*q));
-    Mesh {
-        name: name.into(),
-        positions: p.to_vec(),
-        normals: vec![normal; 4],
-        uvs: uv.to_vec(),
-        indices: vec![0, 1, 2, 0, 2, 3],
-        material,
-        bounds,
-    }
-}
-
 const UV: [Vec2; 4] = [Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)];
 
 /// A black mirror (Ks 0.95, exponent 1000) on the floor (y = 0, x and z in -1..1) and, behind
@@ -41,9 +26,8 @@ const UV: [Vec2; 4] = [Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 
 /// which reflects the wall.
 fn mirror_scene() -> Scene {
     let v = Vec3::new;
-    let mirror = quad_mesh("mirror", [v(-1., 0., 1.), v(1., 0., 1.), v(1., 0., -1.), v(-1., 0., -1.)], UV, Vec3::Y, 0);
-    let wall =
-        quad_mesh("wall", [v(-2., 0., -1.5), v(2., 0., -1.5), v(2., 6., -1.5), v(-2., 6., -1.5)], UV, Vec3::Z, 1);
+    let mirror = uv_quad("mirror", [v(-1., 0., 1.), v(1., 0., 1.), v(1., 0., -1.), v(-1., 0., -1.)], UV, Vec3::Y, 0);
+    let wall = uv_quad("wall", [v(-2., 0., -1.5), v(2., 0., -1.5), v(2., 6., -1.5), v(-2., 6., -1.5)], UV, Vec3::Z, 1);
     let mut glass = Material::diffuse("mirror", Vec3::ZERO);
     glass.specular = Vec3::splat(KS);
     glass.shininess = SHININESS;
@@ -205,7 +189,7 @@ fn a_moving_object_is_in_the_mirror_in_the_frame_it_moves() {
     let (x, y) = project(&s, Vec3::ZERO);
     let (p, _, hit) = reflection_at(&s, x, y);
     let c = p + (hit - p) * ((-1.2 - p.z) / (hit.z - p.z));
-    let panel = quad_mesh(
+    let panel = uv_quad(
         "panel",
         [c + v(-0.6, -0.6, 0.0), c + v(0.6, -0.6, 0.0), c + v(0.6, 0.6, 0.0), c + v(-0.6, 0.6, 0.0)],
         UV,

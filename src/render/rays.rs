@@ -49,9 +49,6 @@ pub struct SceneRays {
 impl SceneRays {
     /// Builds every structure for the scene at time `t` (waits for the builds).
     pub fn new(ctx: &Arc<Context>, scene: &Scene, gpu: &SceneGpu, t: f32) -> GpuResult<SceneRays> {
-        if ctx.acceleration_structure.is_none() {
-            return Err(missing_ray_queries(ctx));
-        }
         let source = TriangleSource {
             vertices: accel::buffer_address(ctx, &gpu.vertices),
             vertex_stride: std::mem::size_of::<super::scene_gpu::Vertex>() as u64,
@@ -265,13 +262,10 @@ impl Pass for RtReflectPass {
         let mut uses = self.gbuffer.surface_reads().to_vec();
         uses.push(Use::image(&self.gbuffer.albedo, read));
         uses.push(Use::image(&self.gbuffer.specular, read));
-        uses.push(Use::image(&self.lod0, read));
+        uses.extend(self.volumes.cone_reads(&self.lod0));
         if !Arc::ptr_eq(&self.lod0, &self.volumes.radiance) {
             uses.push(Use::image(&self.volumes.radiance, read));
         }
-        uses.extend(self.volumes.directional.iter().map(|d| Use::image(d, read)));
-        uses.extend(self.volumes.pool_uses());
-        uses.extend(self.volumes.brick_map_uses(Access::ComputeShaderReadStorage));
         uses.push(Use::overwrite(&self.target, Access::ComputeShaderWrite));
         uses.push(Use::buffer(&self.rays.top.structure.buffer, Access::ComputeShaderReadAccelerationStructure));
         uses.push(Use::buffer(&self.scene.instances, Access::ComputeShaderReadBuffer));

@@ -347,6 +347,17 @@ impl VoxelVolumes {
         [Bind::ImageArray(views, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL), Bind::Sampler(self.sampler.raw)]
     }
 
+    /// What cone.glsl reads in a compute shader: the full-resolution radiance `lod0`, the
+    /// directional volumes, their pooled levels and the brick maps.
+    pub fn cone_reads<'a>(&'a self, lod0: &'a Image) -> Vec<Use<'a>> {
+        let read = Access::ComputeShaderReadSampled;
+        let mut uses = vec![Use::image(lod0, read)];
+        uses.extend(self.directional.iter().map(|d| Use::image(d, read)));
+        uses.extend(self.pool_uses());
+        uses.extend(self.brick_map_uses(Access::ComputeShaderReadStorage));
+        uses
+    }
+
     /// Uses of the bound pooled levels (sampled in compute shaders).
     pub fn pool_uses(&self) -> Vec<Use<'_>> {
         let pooled = self.bricks.as_ref().map_or(&[][..], |b| &b.directional[..]);

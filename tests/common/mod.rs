@@ -300,3 +300,18 @@ pub fn assert_colour_bleeding(scene: &Scene, direct: &FrameOutput, gi: &FrameOut
     assert!(gg > 1.05 * dg, "{what}: near the green wall G/R {gg} vs direct {dg}");
     assert!(g_red.min_element() > d_red.min_element(), "{what} only adds light");
 }
+
+/// A quad with corners `p` (counter-clockwise seen from `normal`) and UVs `uv`, one mesh.
+pub fn uv_quad(name: &str, p: [Vec3; 4], uv: [glam::Vec2; 4], normal: Vec3, material: u32) -> dvsgi::scene::Mesh {
+    let mut bounds = dvsgi::scene::Aabb::EMPTY;
+    p.iter().for_each(|q| bounds.grow(*q));
+    dvsgi::scene::Mesh {
+        name: name.into(),
+        positions: p.to_vec(),
+        normals: vec![normal; 4],
+        uvs: uv.to_vec(),
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material,
+        bounds,
+    }
+}

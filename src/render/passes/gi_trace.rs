@@ -168,10 +168,7 @@ impl Pass for GiTracePass {
     fn uses(&self) -> Vec<Use<'_>> {
         let mut uses = self.gbuffer.surface_reads().to_vec();
         uses.push(Use::image(&self.gbuffer.specular, Access::ComputeShaderReadSampled));
-        uses.push(Use::image(&self.lod0, Access::ComputeShaderReadSampled));
-        uses.extend(self.volumes.directional.iter().map(|d| Use::image(d, Access::ComputeShaderReadSampled)));
-        uses.extend(self.volumes.pool_uses());
-        uses.extend(self.volumes.brick_map_uses(Access::ComputeShaderReadStorage));
+        uses.extend(self.volumes.cone_reads(&self.lod0));
         uses.extend(self.targets.uses(&self.placeholders, Access::ComputeShaderWrite));
         uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
         uses
