@@ -622,6 +622,16 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
         );
     }
     let ctx = common.context()?;
+    print_device(&ctx);
+    if let Some(scene) = scene {
+        print_scene(common, &ctx, scene)?;
+    }
+    check_validation(&ctx)?;
+    Ok(())
+}
+
+/// The chosen device: type, driver, queues, features and limits.
+fn print_device(ctx: &Context) {
     let i = &ctx.info;
     outln!("chosen device: [{}] {}", i.index, i.name);
     outln!("  type: {:?}", i.device_type);
@@ -660,62 +670,64 @@ fn info(common: &CommonArgs, scene: Option<PathBuf>) -> dvsgi::Result<()> {
         i.limits.max_sampler_anisotropy
     );
     outln!("  validation: {}", if ctx.validation_enabled { "on" } else { "off" });
-    if let Some(scene) = scene {
-        outln!(
-            "scene {}: {} objects, {} meshes, {} triangles, {} materials, {} lights",
-            scene.path.display(),
-            scene.objects.len(),
-            scene.meshes.len(),
-            scene.triangle_count(),
-            scene.materials.len(),
-            scene.lights.len()
-        );
-        // The [gi] table as it applies: the file's, then --preset, then every --set.
-        let settings = common.settings();
-        let from = if settings.is_empty() { String::new() } else { format!(" (with {})", settings.join(" ")) };
-        outln!("  [gi]{from}:");
-        match gi_table(&scene.settings.gi) {
-            Ok(t) => t.lines().for_each(|l| outln!("    {l}")),
-            Err(e) => outln!("    (cannot show: {e})"),
-        }
-        let mut scene = scene;
-        let layout = dvsgi::render::budget::resolve_layout(&scene, &dvsgi::render::budget::Limits::of(&ctx));
-        if scene.settings.gi.voxel_layout != layout && scene.settings.gi.mode == dvsgi::scene::GiMode::Vct {
-            let name = if layout == dvsgi::scene::VoxelLayout::Dense { "dense" } else { "bricks" };
-            outln!("  gi.voxel_layout \"auto\" on this device: {name} (docs/SPARSE.md)");
-        }
-        scene.settings.gi.voxel_layout = layout;
-        let estimate = dvsgi::render::budget::Estimate::on(&ctx, &scene);
-        outln!(
-            "  GPU memory estimated before allocating: {:.2} MiB (device-local heap {:.0} MiB)",
-            estimate.total() as f64 / (1024.0 * 1024.0),
-            ctx.info.device_local_heap as f64 / (1024.0 * 1024.0)
-        );
-        let before = ctx.allocated_bytes();
-        let time = scene.settings.time;
-        let textures = scene.textures.len();
-        let mut renderer = Renderer::new(&ctx, scene)?;
-        outln!("  passes (first frame): {}", renderer.pass_names(false).join(" -> "));
-        for img in renderer.images() {
-            let kind = if img.desc.kind == dvsgi::gpu::ImageKind::D3 { "volume" } else { "image" };
-            outln!("  {kind} {}: {:.2} MiB", img.name, img.bytes as f64 / (1024.0 * 1024.0));
-        }
-        if let Some(list) = renderer.voxels().map(|v| v.list.bytes()) {
-            outln!("  buffer voxel work lists: {:.2} MiB", list as f64 / (1024.0 * 1024.0));
-        }
-        outln!(
-            "  textures: {} with mip chains, {:.2} MiB (anisotropic filtering {}x)",
-            textures,
-            renderer.texture_bytes() as f64 / (1024.0 * 1024.0),
-            dvsgi::render::scene_gpu::max_anisotropy(&ctx)
-        );
-        outln!(
-            "  GPU memory allocated for the scene and frame: {:.2} MiB",
-            (ctx.allocated_bytes() - before) as f64 / (1024.0 * 1024.0)
-        );
-        occupancy(&mut renderer, time)?;
+}
+
+/// A scene on the device: its size, the [gi] settings that apply, the passes of its first
+/// frame, the memory of every image and volume, and what its voxels hold.
+fn print_scene(common: &CommonArgs, ctx: &std::sync::Arc<Context>, scene: dvsgi::scene::Scene) -> dvsgi::Result<()> {
+    outln!(
+        "scene {}: {} objects, {} meshes, {} triangles, {} materials, {} lights",
+        scene.path.display(),
+        scene.objects.len(),
+        scene.meshes.len(),
+        scene.triangle_count(),
+        scene.materials.len(),
+        scene.lights.len()
+    );
+    // The [gi] table as it applies: the file's, then --preset, then every --set.
+    let settings = common.settings();
+    let from = if settings.is_empty() { String::new() } else { format!(" (with {})", settings.join(" ")) };
+    outln!("  [gi]{from}:");
+    match gi_table(&scene.settings.gi) {
+        Ok(t) => t.lines().for_each(|l| outln!("    {l}")),
+        Err(e) => outln!("    (cannot show: {e})"),
     }
-    check_validation(&ctx)?;
+    let mut scene = scene;
+    let layout = dvsgi::render::budget::resolve_layout(&scene, &dvsgi::render::budget::Limits::of(ctx));
+    if scene.settings.gi.voxel_layout != layout && scene.settings.gi.mode == dvsgi::scene::GiMode::Vct {
+        let name = if layout == dvsgi::scene::VoxelLayout::Dense { "dense" } else { "bricks" };
+        outln!("  gi.voxel_layout \"auto\" on this device: {name} (docs/SPARSE.md)");
+    }
+    scene.settings.gi.voxel_layout = layout;
+    let estimate = dvsgi::render::budget::Estimate::on(ctx, &scene);
+    outln!(
+        "  GPU memory estimated before allocating: {:.2} MiB (device-local heap {:.0} MiB)",
+        estimate.total() as f64 / (1024.0 * 1024.0),
+        ctx.info.device_local_heap as f64 / (1024.0 * 1024.0)
+    );
+    let before = ctx.allocated_bytes();
+    let time = scene.settings.time;
+    let textures = scene.textures.len();
+    let mut renderer = Renderer::new(ctx, scene)?;
+    outln!("  passes (first frame): {}", renderer.pass_names(false).join(" -> "));
+    for img in renderer.images() {
+        let kind = if img.desc.kind == dvsgi::gpu::ImageKind::D3 { "volume" } else { "image" };
+        outln!("  {kind} {}: {:.2} MiB", img.name, img.bytes as f64 / (1024.0 * 1024.0));
+    }
+    if let Some(list) = renderer.voxels().map(|v| v.list.bytes()) {
+        outln!("  buffer voxel work lists: {:.2} MiB", list as f64 / (1024.0 * 1024.0));
+    }
+    outln!(
+        "  textures: {} with mip chains, {:.2} MiB (anisotropic filtering {}x)",
+        textures,
+        renderer.texture_bytes() as f64 / (1024.0 * 1024.0),
+        dvsgi::render::scene_gpu::max_anisotropy(ctx)
+    );
+    outln!(
+        "  GPU memory allocated for the scene and frame: {:.2} MiB",
+        (ctx.allocated_bytes() - before) as f64 / (1024.0 * 1024.0)
+    );
+    occupancy(&mut renderer, time)?;
     Ok(())
 }
 
