@@ -10,9 +10,15 @@
 //! `reference.png` its display image) and
 //! `sweep.json` (the setup a resumed sweep must match).
 
-use crate::metrics::Comparison;
+use crate::bench::{measure_renderer, Measure};
+use crate::gpu::Context;
+use crate::metrics::{compare, Comparison, LinearImage};
+use crate::reference::{PathTracer, ReferenceOptions};
+use crate::render::{RenderOptions, Renderer};
+use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 #[derive(Debug, thiserror::Error)]
 pub enum SweepError {
@@ -335,6 +341,11 @@ pub const METRICS: [(&str, &str); 4] = [
     ("ssim", "1 - mean SSIM (display image)"),
 ];
 
+/// The name a setting is written as in scene files (its serde string), if it is one.
+fn serde_name(value: impl Serialize) -> Option<String> {
+    serde_json::to_value(value).ok().and_then(|v| v.as_str().map(str::to_owned))
+}
+
 /// One finished configuration (a CSV row).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Row {
@@ -410,7 +421,7 @@ impl Row {
             ao: s.ao,
             bounce_cones: s.bounce_cones,
             bounce_interleave: s.bounce_interleave,
-            mode: serde_json::to_value(s.mode).ok().and_then(|v| v.as_str().map(str::to_owned)).unwrap_or_else(vct),
+            mode: serde_name(s.mode).unwrap_or_else(vct),
             rsm_samples: s.rsm_samples,
             rsm_radius: s.rsm_radius,
             rsm_size: s.rsm_size,
@@ -418,10 +429,7 @@ impl Row {
             lpv_steps: s.lpv_steps,
             specular: s.specular.name().to_owned(),
             specular_rays: s.specular_rays,
-            rt_hit_indirect: serde_json::to_value(s.rt_hit_indirect)
-                .ok()
-                .and_then(|v| v.as_str().map(str::to_owned))
-                .unwrap_or_else(voxel),
+            rt_hit_indirect: serde_name(s.rt_hit_indirect).unwrap_or_else(voxel),
             frame_ms: time[0],
             frame_p95_ms: time[1],
             static_frame_ms: time[2],
@@ -681,55 +689,113 @@ struct ReferenceKey {
 
 /// Run (or resume) a sweep; returns the finished results (also written to `opts.out`).
 pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Result<Results> {
-    use crate::bench::{measure_renderer, Measure};
-    use crate::metrics::{compare, LinearImage};
-    use crate::reference::{PathTracer, ReferenceOptions};
-    use crate::render::{RenderOptions, Renderer};
-
     let dir = &opts.out;
     let base = common.load_scene(&opts.scene, &opts.size)?;
     let configs = opts.grid.configs();
-    // Every configuration must load before anything runs (a bad value names its knob).
+    let scenes = load_config_scenes(common, opts, &configs)?;
+    // Only now that everything is known to load: nothing is created for a bad grid.
+    create_out_dir(dir)?;
+    let ctx = common.context()?;
+    let setup = setup_of(common, opts, &base, &ctx.info.name);
+    check_or_record_setup(dir, &setup)?;
+    eprintln!("sweep: {} configurations of {} on {}", configs.len(), opts.scene.display(), ctx.info.name);
+
+    let key = reference_cache_key(common, opts, &setup);
+    let (reference, reference_key) = load_or_trace_reference(&ctx, &base, opts, key)?;
+    crate::cli::check_validation(&ctx)?;
+    write_reference_png(dir, &base, &reference)?;
+
+    let csv_path = dir.join("results.csv");
+    let mut rows = read_rows(&csv_path)?;
+    let todo = configs_to_run(&configs, &rows, &csv_path);
+    let bar = progress_bar(todo.len() as u64, "configurations");
+    for i in todo {
+        bar.set_message(configs[i].label());
+        rows.push(measure_config(&ctx, opts, &configs[i], &scenes[i], &reference)?);
+        // Written after every configuration: an interrupted sweep resumes from here.
+        mark_fronts(&mut rows);
+        write_rows(&csv_path, &rows)?;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    sort_in_grid_order(&mut rows, &configs);
+    mark_fronts(&mut rows);
+    write_rows(&csv_path, &rows)?;
+    let results = Results {
+        setup,
+        reference_seconds: reference_key.seconds,
+        reference_relative_standard_error: reference_key.relative_standard_error,
+        reference_noise_rmse: reference_key.noise_rmse,
+        knob_effects: knob_effects(&opts.grid, &rows),
+        rows,
+    };
+    write_results(dir, &base.name, &results)?;
+    Ok(results)
+}
+
+/// Every configuration's scene, all loaded before anything runs (a bad value names its knob).
+fn load_config_scenes(
+    common: &crate::cli::CommonArgs,
+    opts: &SweepOptions,
+    configs: &[Config],
+) -> crate::Result<Vec<Scene>> {
     let mut scenes = Vec::with_capacity(configs.len());
-    for c in &configs {
+    for c in configs {
         // Voxels update only when asked: the update frames ask every time, the static ones never.
         let mut extra = opts.size.clone();
         extra.push(("gi.update_interval".into(), "0".into()));
         extra.extend(c.overrides());
         scenes.push(common.load_scene(&opts.scene, &extra)?);
     }
-    // Only now that everything is known to load: nothing is created for a bad grid.
-    std::fs::create_dir_all(dir)
-        .map_err(|e| SweepError::File { path: dir.clone(), message: format!("cannot create the directory: {e}") })?;
+    Ok(scenes)
+}
+
+/// Create the output directory and check that `results.csv` can be written in it.
+fn create_out_dir(dir: &Path) -> crate::Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| SweepError::File {
+        path: dir.to_path_buf(),
+        message: format!("cannot create the directory: {e}"),
+    })?;
     crate::output::check_target_dir(&dir.join("results.csv"))?;
-    let ctx = common.context()?;
-    let setup = Setup {
+    Ok(())
+}
+
+/// What this sweep is made with, on the device named `device`.
+fn setup_of(common: &crate::cli::CommonArgs, opts: &SweepOptions, base: &Scene, device: &str) -> Setup {
+    Setup {
         scene: opts.scene.display().to_string(),
         width: base.settings.width,
         height: base.settings.height,
         time: base.settings.time,
         settings: common.settings(),
         spp: opts.spp,
-        device: ctx.info.name.clone(),
+        device: device.to_owned(),
         frames: opts.frames,
         warmup: opts.warmup,
         schedule: opts.schedule.to_string(),
-    };
+    }
+}
+
+/// Check `setup` against the `sweep.json` in `dir` (a resumed sweep must match it), or write it
+/// there when there is none.
+fn check_or_record_setup(dir: &Path, setup: &Setup) -> crate::Result<()> {
     let setup_path = dir.join("sweep.json");
     if let Ok(text) = std::fs::read_to_string(&setup_path) {
         let old: Setup = serde_json::from_str(&text)
             .map_err(|e| SweepError::File { path: setup_path.clone(), message: format!("not a sweep setup: {e}") })?;
-        if let Some((what, old, new)) = old.difference(&setup) {
-            return Err(SweepError::SetupChanged { dir: dir.clone(), what, old, new }.into());
+        if let Some((what, old, new)) = old.difference(setup) {
+            return Err(SweepError::SetupChanged { dir: dir.to_path_buf(), what, old, new }.into());
         }
     } else {
-        crate::output::write_bytes(&setup_path, serde_json::to_string_pretty(&setup).expect("JSON").as_bytes())?;
+        crate::output::write_bytes(&setup_path, serde_json::to_string_pretty(setup).expect("JSON").as_bytes())?;
     }
-    eprintln!("sweep: {} configurations of {} on {}", configs.len(), opts.scene.display(), ctx.info.name);
+    Ok(())
+}
 
-    // The reference, cached under a key of everything that shapes it.
+/// The key the reference is cached under: everything that shapes it.
+fn reference_cache_key(common: &crate::cli::CommonArgs, opts: &SweepOptions, setup: &Setup) -> String {
     let scene_text = std::fs::read_to_string(&opts.scene).unwrap_or_default();
-    let key = format!(
+    format!(
         "dvsgi {} | {}x{} | t {} | spp {} | sets {:?} | scene {}",
         env!("CARGO_PKG_VERSION"),
         setup.width,
@@ -738,51 +804,83 @@ pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Resul
         opts.spp,
         common.settings(),
         scene_text
-    );
-    let ref_path = dir.join("reference.exr");
-    let key_path = dir.join("reference.json");
-    let cached = std::fs::read_to_string(&key_path)
-        .ok()
-        .and_then(|t| serde_json::from_str::<ReferenceKey>(&t).ok())
-        .filter(|k| k.key == key && ref_path.exists());
-    let (reference, reference_key) = match cached {
+    )
+}
+
+/// The reference image: the one cached in `opts.out` when it was made under `key`, else
+/// traced anew (and cached).
+fn load_or_trace_reference(
+    ctx: &Arc<Context>,
+    base: &Scene,
+    opts: &SweepOptions,
+    key: String,
+) -> crate::Result<(LinearImage, ReferenceKey)> {
+    let ref_path = opts.out.join("reference.exr");
+    match cached_reference_key(&opts.out, &key) {
         Some(k) => {
             eprintln!("reference: cached {} ({} spp, {:.1} s to trace)", ref_path.display(), opts.spp, k.seconds);
-            (LinearImage::read_exr(&ref_path)?, k)
+            Ok((LinearImage::read_exr(&ref_path)?, k))
         }
-        None => {
-            let start = std::time::Instant::now();
-            let ro = ReferenceOptions { spp: opts.spp, ..Default::default() };
-            let mut pt = PathTracer::new(&ctx, &base, ro)?;
-            let bar = progress_bar(opts.spp as u64, "reference spp");
-            pt.run(|done, _| bar.set_position(done as u64))?;
-            bar.finish_and_clear();
-            let image = pt.image()?;
-            drop(pt);
-            let seconds = start.elapsed().as_secs_f64();
-            crate::output::write_exr(&ref_path, image.width, image.height, &image.mean)?;
-            let var = crate::reference::variance_path(&ref_path);
-            crate::output::write_exr(&var, image.width, image.height, &image.variance)?;
-            let noise_rmse =
-                (image.variance.iter().map(|&v| v as f64).sum::<f64>() / image.variance.len().max(1) as f64).sqrt();
-            let k = ReferenceKey { key, seconds, relative_standard_error: image.relative_standard_error(), noise_rmse };
-            crate::output::write_bytes(&key_path, serde_json::to_string_pretty(&k).expect("JSON").as_bytes())?;
-            eprintln!(
-                "reference: {} spp in {seconds:.1} s, mean relative standard error {:.4}",
-                opts.spp, k.relative_standard_error
-            );
-            (LinearImage { width: image.width, height: image.height, rgb: image.mean }, k)
-        }
-    };
-    crate::cli::check_validation(&ctx)?;
+        None => trace_reference(ctx, base, opts, key),
+    }
+}
+
+/// The cached reference's `reference.json` in `dir`, if it was made under `key` and its image
+/// is there.
+fn cached_reference_key(dir: &Path, key: &str) -> Option<ReferenceKey> {
+    let ref_path = dir.join("reference.exr");
+    std::fs::read_to_string(dir.join("reference.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<ReferenceKey>(&t).ok())
+        .filter(|k| k.key == key && ref_path.exists())
+}
+
+/// Path-trace the reference and cache it in `opts.out`: `reference.exr`, its variance and
+/// `reference.json` (under `key`).
+fn trace_reference(
+    ctx: &Arc<Context>,
+    base: &Scene,
+    opts: &SweepOptions,
+    key: String,
+) -> crate::Result<(LinearImage, ReferenceKey)> {
+    let ref_path = opts.out.join("reference.exr");
+    let start = std::time::Instant::now();
+    let ro = ReferenceOptions { spp: opts.spp, ..Default::default() };
+    let mut pt = PathTracer::new(ctx, base, ro)?;
+    let bar = progress_bar(opts.spp as u64, "reference spp");
+    pt.run(|done, _| bar.set_position(done as u64))?;
+    bar.finish_and_clear();
+    let image = pt.image()?;
+    drop(pt);
+    let seconds = start.elapsed().as_secs_f64();
+    crate::output::write_exr(&ref_path, image.width, image.height, &image.mean)?;
+    let var = crate::reference::variance_path(&ref_path);
+    crate::output::write_exr(&var, image.width, image.height, &image.variance)?;
+    let noise_rmse =
+        (image.variance.iter().map(|&v| v as f64).sum::<f64>() / image.variance.len().max(1) as f64).sqrt();
+    let k = ReferenceKey { key, seconds, relative_standard_error: image.relative_standard_error(), noise_rmse };
+    let key_path = opts.out.join("reference.json");
+    crate::output::write_bytes(&key_path, serde_json::to_string_pretty(&k).expect("JSON").as_bytes())?;
+    eprintln!(
+        "reference: {} spp in {seconds:.1} s, mean relative standard error {:.4}",
+        opts.spp, k.relative_standard_error
+    );
+    Ok((LinearImage { width: image.width, height: image.height, rgb: image.mean }, k))
+}
+
+/// Write the reference's display image `reference.png` in `dir`, unless it is there.
+fn write_reference_png(dir: &Path, base: &Scene, reference: &LinearImage) -> crate::Result<()> {
     let png_path = dir.join("reference.png");
     if !png_path.exists() {
-        let ev = crate::metrics::display_exposure(&base.settings, &reference);
-        crate::output::write_display_png(&png_path, &reference, ev, base.settings.tonemap)?;
+        let ev = crate::metrics::display_exposure(&base.settings, reference);
+        crate::output::write_display_png(&png_path, reference, ev, base.settings.tonemap)?;
     }
+    Ok(())
+}
 
-    let csv_path = dir.join("results.csv");
-    let mut rows = read_rows(&csv_path)?;
+/// The indices of the configurations with no row in `rows` yet, saying what is kept and what
+/// is resumed.
+fn configs_to_run(configs: &[Config], rows: &[Row], csv_path: &Path) -> Vec<usize> {
     // Rows of configurations outside this grid (an earlier sweep with other --grid values in
     // this directory, so of the same setup) are the user's measurements: they stay, and they
     // count in the fronts and the knob effects like the others.
@@ -803,68 +901,67 @@ pub fn run(common: &crate::cli::CommonArgs, opts: &SweepOptions) -> crate::Resul
             csv_path.display()
         );
     }
-    let bar = progress_bar(todo.len() as u64, "configurations");
-    for i in todo {
-        let (config, scene) = (&configs[i], &scenes[i]);
-        bar.set_message(config.label());
-        let t = scene.settings.time;
-        let options = RenderOptions { mode: opts.schedule, frames_in_flight: 2 };
-        let mut r = Renderer::with_options(&ctx, scene.clone(), options)?;
-        let gpu_mib = r.images().iter().map(|i| i.bytes as f64).sum::<f64>() / (1024.0 * 1024.0);
-        let mut m = Measure {
-            mode: opts.schedule,
-            frames: opts.frames,
-            warmup: opts.warmup,
-            frames_in_flight: 2,
-            serial_profile: false,
-            dynamic_dt: Some(0.0),
-        };
-        let (update, _) = measure_renderer(&mut r, scene, &m)?;
-        m.dynamic_dt = None;
-        let (cached, _) = measure_renderer(&mut r, scene, &m)?;
-        r.render(t, true)?;
-        let frame = r.output();
-        drop(r);
-        crate::cli::check_validation(&ctx)?;
-        let test = LinearImage { width: frame.width, height: frame.height, rgb: crate::output::radiance_rgb(&frame) };
-        let s = &scene.settings;
-        // A test and its reference are shown at one exposure: the reference's, where it is "auto".
-        let c = compare(&test, &reference, crate::metrics::display_exposure(s, &reference), s.tonemap)?;
-        let time = [update.frame_host_ms.median, update.frame_host_ms.p95, cached.frame_host_ms.median];
-        rows.push(Row::new(config.label(), &s.gi, time, gpu_mib, &c));
-        mark_fronts(&mut rows);
-        write_rows(&csv_path, &rows)?;
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
-    // The grid's order, whatever order the rows were finished in; earlier rows after them.
+    todo
+}
+
+/// Time one configuration (frames that update the voxels, then frames that reuse them) and
+/// compare its image with the reference: its row, fronts not yet marked.
+fn measure_config(
+    ctx: &Arc<Context>,
+    opts: &SweepOptions,
+    config: &Config,
+    scene: &Scene,
+    reference: &LinearImage,
+) -> crate::Result<Row> {
+    let t = scene.settings.time;
+    let options = RenderOptions { mode: opts.schedule, frames_in_flight: 2 };
+    let mut r = Renderer::with_options(ctx, scene.clone(), options)?;
+    let gpu_mib = r.images().iter().map(|i| i.bytes as f64).sum::<f64>() / (1024.0 * 1024.0);
+    let mut m = Measure {
+        mode: opts.schedule,
+        frames: opts.frames,
+        warmup: opts.warmup,
+        frames_in_flight: 2,
+        serial_profile: false,
+        dynamic_dt: Some(0.0),
+    };
+    let (update, _) = measure_renderer(&mut r, scene, &m)?;
+    m.dynamic_dt = None;
+    let (cached, _) = measure_renderer(&mut r, scene, &m)?;
+    r.render(t, true)?;
+    let frame = r.output();
+    drop(r);
+    crate::cli::check_validation(ctx)?;
+    let test = LinearImage { width: frame.width, height: frame.height, rgb: crate::output::radiance_rgb(&frame) };
+    let s = &scene.settings;
+    // A test and its reference are shown at one exposure: the reference's, where it is "auto".
+    let c = compare(&test, reference, crate::metrics::display_exposure(s, reference), s.tonemap)?;
+    let time = [update.frame_host_ms.median, update.frame_host_ms.p95, cached.frame_host_ms.median];
+    Ok(Row::new(config.label(), &s.gi, time, gpu_mib, &c))
+}
+
+/// The grid's order, whatever order the rows were finished in; earlier rows after them.
+fn sort_in_grid_order(rows: &mut [Row], configs: &[Config]) {
     let order = |r: &Row| configs.iter().position(|c| c.label() == r.label).unwrap_or(usize::MAX);
     rows.sort_by_key(order);
-    mark_fronts(&mut rows);
-    write_rows(&csv_path, &rows)?;
-    let results = Results {
-        setup,
-        reference_seconds: reference_key.seconds,
-        reference_relative_standard_error: reference_key.relative_standard_error,
-        reference_noise_rmse: reference_key.noise_rmse,
-        knob_effects: knob_effects(&opts.grid, &rows),
-        rows,
-    };
+}
+
+/// Write `results.json` and the frontier picture of every metric to `dir`.
+fn write_results(dir: &Path, scene_name: &str, results: &Results) -> crate::Result<()> {
     crate::output::write_bytes(
         &dir.join("results.json"),
-        serde_json::to_string_pretty(&results).expect("JSON").as_bytes(),
+        serde_json::to_string_pretty(results).expect("JSON").as_bytes(),
     )?;
-    let scene_name = base.name.clone();
     for metric in METRICS {
         plot(
             &dir.join(format!("frontier-{}.svg", metric.0)),
-            &scene_name,
+            scene_name,
             &results.setup.device,
             &results.rows,
             metric,
         )?;
     }
-    Ok(results)
+    Ok(())
 }
 
 fn progress_bar(len: u64, what: &str) -> indicatif::ProgressBar {

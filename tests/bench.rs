@@ -10,6 +10,7 @@ fn schema() -> jsonschema::Validator {
     jsonschema::validator_for(&serde_json::from_str(&text).unwrap()).expect("a valid JSON Schema")
 }
 
+// Long: one bench run, then every field of its report and timeline checked against the schema.
 #[test]
 fn bench_smoke_writes_schema_valid_json_and_a_timeline() {
     let dir = tempfile::tempdir().unwrap();

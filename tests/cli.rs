@@ -169,6 +169,7 @@ fn info_describes_the_bricked_voxel_layout() {
 
 /// With voxel GI on a static scene: voxel clear + static voxelization, albedo and normal
 /// volumes with their memory, and no emission volume, flag volume or dynamic passes.
+// Long: one `info` output, checked line by line against the passes and volumes the scene needs.
 #[test]
 fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
     let o = dvsgi_with(

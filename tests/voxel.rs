@@ -213,6 +213,7 @@ fn voxel_albedo_and_normal_are_averaged() {
 /// voxel (flag set) keeps its exact value. The work list follows: it holds exactly the
 /// occupied voxels after each update, and the voxels the object left become its stale list,
 /// zeroed in every radiance volume.
+// Long: one scene rendered before and after its object moves; each check reads the state both frames left.
 #[test]
 fn dynamic_update_clears_old_voxels_and_keeps_static_ones() {
     let v = Vec3::new;
@@ -365,6 +366,7 @@ fn cornell_vct(overrides: &[(&str, &str)]) -> Scene {
 /// voxel centre with the volume's own 8-bit albedo) within 1%, for both attenuation modes and
 /// both occlusion methods; floor voxels deep in a block's shadow are dark with both methods;
 /// every value is finite.
+// Long: a table of attenuation x occlusion cases, each checked against the same analytic sums.
 #[test]
 fn voxel_lighting_matches_analytic_irradiance_and_shadows() {
     let ctx = context();

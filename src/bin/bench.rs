@@ -12,6 +12,7 @@ use dvsgi::render::{Mode, RenderOptions, Renderer};
 use dvsgi::scene::Scene;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum Scenario {
@@ -98,6 +99,23 @@ fn usage(msg: String) -> dvsgi::Error {
 }
 
 fn run(args: Args) -> dvsgi::Result<()> {
+    check_outputs(&args)?;
+    let scene = load_bench_scene(&args)?;
+    let ctx = args.common.context()?;
+    eprintln!("device: {} ({}); {}", ctx.info.name, ctx.info.driver_info, ctx.topology.describe());
+    let (mut modes, calibrated) = measure_modes(&ctx, &scene, &args)?;
+    if args.error_frames > 0 {
+        add_image_errors(&ctx, &scene, &args, &mut modes)?;
+    }
+    check_validation(&ctx)?;
+    add_ratios_to_sync(&mut modes);
+    let report = build_report(&ctx, &args, &scene, modes, calibrated);
+    print_table(&ctx, &report);
+    write_files(&args, &report)
+}
+
+/// Check the output arguments before anything runs: writable targets, an SVG timeline, a mode.
+fn check_outputs(args: &Args) -> dvsgi::Result<()> {
     let outs: Vec<PathBuf> = args.json.iter().chain(&args.timeline).cloned().collect();
     dvsgi::output::check_targets(&outs)?;
     if let Some(t) = args.timeline.as_ref().filter(|t| !has_extension(t, "svg")) {
@@ -106,6 +124,12 @@ fn run(args: Args) -> dvsgi::Result<()> {
     if args.modes.is_empty() {
         return Err(usage("--modes: give at least one of sync, async, async-lagged".into()));
     }
+    Ok(())
+}
+
+/// The scene with `--width/--height` (and, dynamic, a voxel update every frame), checked to
+/// suit the scenario.
+fn load_bench_scene(args: &Args) -> dvsgi::Result<Scene> {
     let mut extra = Vec::new();
     if let Some(w) = args.width {
         extra.push(("render.width".to_string(), w.to_string()));
@@ -129,41 +153,54 @@ fn run(args: Args) -> dvsgi::Result<()> {
     if args.scenario == Scenario::Dynamic && !(args.dt.is_finite() && args.dt > 0.0) {
         return Err(usage(format!("--dt must be a positive number of seconds, not {}", args.dt)));
     }
-    let ctx = args.common.context()?;
-    let separate = ctx.topology != QueueTopology::SingleQueue;
-    eprintln!("device: {} ({}); {}", ctx.info.name, ctx.info.driver_info, ctx.topology.describe());
+    Ok(scene)
+}
+
+/// Time every `--modes` mode; the flag says whether every timestamp was calibrated.
+fn measure_modes(ctx: &Arc<Context>, scene: &Scene, args: &Args) -> dvsgi::Result<(Vec<ModeReport>, bool)> {
     let mut modes = Vec::new();
     let mut calibrated = true;
     for &mode in &args.modes {
         eprintln!("{mode}: {} frames after {} warm-up", args.frames, args.warmup);
-        let (m, cal) = bench::measure(&ctx, &scene, &measure_spec(&args, mode))?;
+        let (m, cal) = bench::measure(ctx, scene, &measure_spec(args, mode))?;
         calibrated &= cal;
         modes.push(m);
     }
-    if args.error_frames > 0 {
-        for m in &mut modes {
-            let mode: Mode = m.mode.parse().map_err(usage)?;
-            if mode != Mode::Sync {
-                eprintln!("{mode}: image error against sync over {} frames", args.error_frames);
-                m.image_error_vs_sync = Some(image_error(&ctx, &scene, &args, mode)?);
-            }
+    Ok((modes, calibrated))
+}
+
+/// Each mode's image error against sync (all but sync itself).
+fn add_image_errors(ctx: &Arc<Context>, scene: &Scene, args: &Args, modes: &mut [ModeReport]) -> dvsgi::Result<()> {
+    for m in modes {
+        let mode: Mode = m.mode.parse().map_err(usage)?;
+        if mode != Mode::Sync {
+            eprintln!("{mode}: image error against sync over {} frames", args.error_frames);
+            m.image_error_vs_sync = Some(image_error(ctx, scene, args, mode)?);
         }
     }
-    check_validation(&ctx)?;
+    Ok(())
+}
+
+/// Each mode's median host frame time over sync's (where sync ran; not for sync itself).
+fn add_ratios_to_sync(modes: &mut [ModeReport]) {
     let sync_median = modes.iter().find(|m| m.mode == "sync").map(|m| m.frame_host_ms.median);
-    for m in &mut modes {
+    for m in modes {
         if m.mode != "sync" {
             m.frame_ratio_to_sync = sync_median.map(|s| m.frame_host_ms.median / s);
         }
     }
-    let report = Report {
+}
+
+/// The report (schema dvsgi-bench/1) of the measured `modes`.
+fn build_report(ctx: &Context, args: &Args, scene: &Scene, modes: Vec<ModeReport>, calibrated: bool) -> Report {
+    Report {
         schema: bench::SCHEMA.to_string(),
         device: bench::DeviceReport {
             name: ctx.info.name.clone(),
             driver: ctx.info.driver_info.clone(),
             device_type: format!("{:?}", ctx.info.device_type),
             queue_topology: ctx.topology.describe().to_string(),
-            separate_queues: separate,
+            separate_queues: ctx.topology != QueueTopology::SingleQueue,
             timestamps_calibrated: calibrated,
             timestamps_trusted: !ctx.info.is_cpu(),
         },
@@ -181,20 +218,21 @@ fn run(args: Args) -> dvsgi::Result<()> {
         frames_in_flight: args.frames_in_flight,
         settings: args.common.settings(),
         modes,
-    };
-    print_table(&ctx, &report);
-    // Both outputs or neither.
+    }
+}
+
+/// Write `--json` and `--timeline`: both or neither.
+fn write_files(args: &Args, report: &Report) -> dvsgi::Result<()> {
     let mut files: Vec<(&std::path::Path, Vec<u8>)> = Vec::new();
     if let Some(path) = &args.json {
-        files.push((path, serde_json::to_string_pretty(&report).expect("JSON serialisation").into_bytes()));
+        files.push((path, serde_json::to_string_pretty(report).expect("JSON serialisation").into_bytes()));
     }
     if let Some(path) = &args.timeline {
-        files.push((path, bench::timeline_svg(&report).into_bytes()));
+        files.push((path, bench::timeline_svg(report).into_bytes()));
     }
     dvsgi::cli::write_outputs(&files)
 }
 
-/// Scene time of frame `i`.
 /// The bench's timing settings for one mode.
 fn measure_spec(args: &Args, mode: Mode) -> Measure {
     Measure {
@@ -207,11 +245,13 @@ fn measure_spec(args: &Args, mode: Mode) -> Measure {
     }
 }
 
+/// Scene time of frame `i`.
 fn time_of(scene: &Scene, args: &Args, i: u32) -> f32 {
     measure_spec(args, Mode::Sync).time_of(scene, i)
 }
 
-fn image_error(ctx: &std::sync::Arc<Context>, scene: &Scene, args: &Args, mode: Mode) -> dvsgi::Result<ImageError> {
+/// `mode`'s image against sync's over `--error-frames` frames at the same scene times.
+fn image_error(ctx: &Arc<Context>, scene: &Scene, args: &Args, mode: Mode) -> dvsgi::Result<ImageError> {
     let opts = |mode| RenderOptions { mode, frames_in_flight: args.frames_in_flight };
     let mut reference = Renderer::with_options(ctx, scene.clone(), opts(Mode::Sync))?;
     let mut other = Renderer::with_options(ctx, scene.clone(), opts(mode))?;
@@ -233,7 +273,43 @@ fn image_error(ctx: &std::sync::Arc<Context>, scene: &Scene, args: &Args, mode: 
     })
 }
 
+/// The report as a table on stdout: one column per mode.
 fn print_table(ctx: &Context, r: &Report) {
+    print_table_heading(r);
+    let t = Table::new(r);
+    t.head();
+    t.row("frame, host wall clock", &|m| fmt_stats(Some(m.frame_host_ms)));
+    t.row("  mean, with the final drain", &|m| format!("{:.2}", m.frame_host_mean_ms));
+    t.row("frame GPU span (timestamps)", &|m| fmt_stats(m.gpu_span_ms));
+    t.row("graphics queue busy (timestamps)", &|m| fmt_stats(m.graphics_busy_ms));
+    t.row("compute queue busy (timestamps)", &|m| fmt_stats(m.compute_busy_ms));
+    print_pass_rows(&t);
+    t.row("ratio to sync (host median)", &|m| m.frame_ratio_to_sync.map(|x| format!("{x:.3}")).unwrap_or("-".into()));
+    t.row("image error vs sync (mean, max)", &|m| {
+        m.image_error_vs_sync
+            .as_ref()
+            .map(|e| format!("{:.2e}, {:.2e}", e.mean_relative, e.max_relative))
+            .unwrap_or("-".into())
+    });
+    t.row("submits per frame", &|m| format!("{:.1}", m.submits_per_frame));
+    if let Some(o) = r.modes.iter().find_map(|m| m.occupancy) {
+        outln!("occupied voxels (work list): {}", o.summary());
+    }
+    if let Some(v) = r.modes.iter().find_map(|m| m.voxel_memory.as_ref()) {
+        outln!("{}", v.summary()[0]);
+    }
+    t.row("host waits: in frame / slot reuse", &|m| format!("{} / {}", m.host_waits.in_frame, m.host_waits.slot_reuse));
+    if ctx.info.is_cpu() {
+        outln!(
+            "note: {} is a CPU implementation; its GPU timestamps can be wrong — compare host wall-clock \
+             figures (and --serial-profile for per-pass host times)",
+            ctx.info.name
+        );
+    }
+}
+
+/// The lines above the table: device, queue note and scene.
+fn print_table_heading(r: &Report) {
     outln!("device: {} ({}); queue topology: {}", r.device.name, r.device.driver, r.device.queue_topology);
     if !r.device.separate_queues {
         outln!("note: one queue — the async modes submit both streams to it, so they cannot overlap here");
@@ -250,31 +326,55 @@ fn print_table(ctx: &Context, r: &Report) {
         r.warmup,
         r.frames_in_flight
     );
-    let longest = r.modes.iter().flat_map(|m| &m.passes).map(|p| p.name.len() + 17).max().unwrap_or(0);
-    let w = longest.max(34);
-    let mut head = format!("{:<w$}", "median ms (min..p95)");
-    for m in &r.modes {
-        head.push_str(&format!(" {:>24}", m.mode));
+}
+
+/// The table's columns: a label column `w` wide, then one per mode.
+struct Table<'a> {
+    modes: &'a [ModeReport],
+    w: usize,
+}
+
+impl<'a> Table<'a> {
+    /// The table of `r`'s modes, the label column as wide as the longest label needs.
+    fn new(r: &'a Report) -> Table<'a> {
+        let longest = r.modes.iter().flat_map(|m| &m.passes).map(|p| p.name.len() + 17).max().unwrap_or(0);
+        Table { modes: &r.modes, w: longest.max(34) }
     }
-    outln!("{head}");
-    let row = |label: &str, f: &dyn Fn(&ModeReport) -> String| {
+
+    /// Print the header row: the modes' names.
+    fn head(&self) {
+        let w = self.w;
+        let mut head = format!("{:<w$}", "median ms (min..p95)");
+        for m in self.modes {
+            head.push_str(&format!(" {:>24}", m.mode));
+        }
+        outln!("{head}");
+    }
+
+    /// Print one row: `label`, then `f` of each mode.
+    fn row(&self, label: &str, f: &dyn Fn(&ModeReport) -> String) {
+        let w = self.w;
         let mut line = format!("{label:<w$}");
-        for m in &r.modes {
+        for m in self.modes {
             line.push_str(&format!(" {:>24}", f(m)));
         }
         outln!("{line}");
-    };
-    let fmt = |s: Option<Stats>| match s {
+    }
+}
+
+/// `median (min..p95)`, or `-`.
+fn fmt_stats(s: Option<Stats>) -> String {
+    match s {
         Some(s) => format!("{:.2} ({:.2}..{:.2})", s.median, s.min, s.p95),
         None => "-".to_string(),
-    };
-    row("frame, host wall clock", &|m| fmt(Some(m.frame_host_ms)));
-    row("  mean, with the final drain", &|m| format!("{:.2}", m.frame_host_mean_ms));
-    row("frame GPU span (timestamps)", &|m| fmt(m.gpu_span_ms));
-    row("graphics queue busy (timestamps)", &|m| fmt(m.graphics_busy_ms));
-    row("compute queue busy (timestamps)", &|m| fmt(m.compute_busy_ms));
+    }
+}
+
+/// A row per pass (in first-seen order over the modes) with its GPU time and queue, and one
+/// with its serial host time where some mode has it.
+fn print_pass_rows(t: &Table) {
     let mut names: Vec<&str> = Vec::new();
-    for m in &r.modes {
+    for m in t.modes {
         for p in &m.passes {
             if !names.contains(&p.name.as_str()) {
                 names.push(&p.name);
@@ -283,34 +383,12 @@ fn print_table(ctx: &Context, r: &Report) {
     }
     for n in names {
         let find = |m: &ModeReport| m.passes.iter().find(|p| p.name == n).cloned();
-        row(&format!("  {n} (GPU)"), &|m| match find(m) {
-            Some(p) => format!("{} {}", fmt(p.gpu_ms), if p.queue == "compute" { "C" } else { "G" }),
+        t.row(&format!("  {n} (GPU)"), &|m| match find(m) {
+            Some(p) => format!("{} {}", fmt_stats(p.gpu_ms), if p.queue == "compute" { "C" } else { "G" }),
             None => "-".to_string(),
         });
-        if r.modes.iter().any(|m| find(m).is_some_and(|p| p.serial_host_ms.is_some())) {
-            row(&format!("  {n} (serial, host)"), &|m| fmt(find(m).and_then(|p| p.serial_host_ms)));
+        if t.modes.iter().any(|m| find(m).is_some_and(|p| p.serial_host_ms.is_some())) {
+            t.row(&format!("  {n} (serial, host)"), &|m| fmt_stats(find(m).and_then(|p| p.serial_host_ms)));
         }
-    }
-    row("ratio to sync (host median)", &|m| m.frame_ratio_to_sync.map(|x| format!("{x:.3}")).unwrap_or("-".into()));
-    row("image error vs sync (mean, max)", &|m| {
-        m.image_error_vs_sync
-            .as_ref()
-            .map(|e| format!("{:.2e}, {:.2e}", e.mean_relative, e.max_relative))
-            .unwrap_or("-".into())
-    });
-    row("submits per frame", &|m| format!("{:.1}", m.submits_per_frame));
-    if let Some(o) = r.modes.iter().find_map(|m| m.occupancy) {
-        outln!("occupied voxels (work list): {}", o.summary());
-    }
-    if let Some(v) = r.modes.iter().find_map(|m| m.voxel_memory.as_ref()) {
-        outln!("{}", v.summary()[0]);
-    }
-    row("host waits: in frame / slot reuse", &|m| format!("{} / {}", m.host_waits.in_frame, m.host_waits.slot_reuse));
-    if ctx.info.is_cpu() {
-        outln!(
-            "note: {} is a CPU implementation; its GPU timestamps can be wrong — compare host wall-clock \
-             figures (and --serial-profile for per-pass host times)",
-            ctx.info.name
-        );
     }
 }

@@ -5,12 +5,15 @@
 
 use clap::Parser;
 use dvsgi::cli::{check_validation, report, CommonArgs};
+use dvsgi::gpu::Context;
 use dvsgi::outln;
 use dvsgi::render::Mode;
-use dvsgi::soak::{soak_mode, ModeSoak, SoakOptions};
+use dvsgi::scene::Scene;
+use dvsgi::soak::{soak_mode, ModeSoak, Sample, SoakOptions};
 use serde::Serialize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
 
 #[derive(Parser)]
 #[command(
@@ -124,62 +127,88 @@ fn run(args: Args) -> dvsgi::Result<bool> {
         args.frames,
         if ctx.validation_enabled { "on" } else { "off" }
     );
-    let mib = |b: u64| b as f64 / 1048576.0;
     let mut modes = Vec::new();
     let mut ok = true;
     for &mode in &args.modes {
-        outln!("mode {}:", mode.name());
-        outln!("  frame   host ms/frame   RSS MiB   GPU alloc MiB (n)   GPU blocks MiB (n)   drift     validation");
-        let m = soak_mode(&ctx, &scene, mode, &o, |s| {
-            outln!(
-                "  {:>6}  {:>12.2}   {:>8.1}   {:>9.3} ({:>3})      {:>9.3} ({:>2})      {:.2e}  {}",
-                s.frame,
-                s.host_ms,
-                mib(s.rss_bytes),
-                mib(s.gpu_allocated_bytes),
-                s.gpu_allocations,
-                mib(s.gpu_block_bytes),
-                s.gpu_blocks,
-                s.drift,
-                s.validation_messages
-            )
-        })?;
-        let rss = m.growth(|s| s.rss_bytes) as f64 / 1048576.0;
-        let gpu = m.growth(|s| s.gpu_allocated_bytes);
-        let blocks = m.growth(|s| s.gpu_block_bytes);
-        let allocs = m.growth(|s| s.gpu_allocations as u64);
-        outln!(
-            "  after the first sample: RSS {rss:+.2} MiB, GPU allocations {gpu:+} B ({allocs:+}), blocks {blocks:+} B; \
-             max drift {:.2e}; {:.1} s",
-            m.max_drift(),
-            m.seconds
-        );
-        if rss > args.max_rss_growth_mib
-            || gpu != 0
-            || blocks != 0
-            || allocs != 0
-            || f64::from(m.max_drift()) > args.max_drift
-        {
-            outln!("  FAILED: memory grew or the image drifted");
-            ok = false;
-        }
+        let (m, held) = soak_one_mode(&ctx, &scene, mode, &o, &args)?;
+        ok &= held;
         modes.push(m);
     }
     if let Some(j) = &args.json {
-        let r = Report {
-            schema: "dvsgi-soak/1",
-            device: ctx.info.name.clone(),
-            scene: scene_path.display().to_string(),
-            settings: args.common.settings(),
-            width: args.width,
-            height: args.height,
-            frames: args.frames,
-            dt: args.dt,
-            modes: &modes,
-        };
-        let text = serde_json::to_string_pretty(&r).map_err(|e| dvsgi::Error::Usage(format!("JSON: {e}")))?;
-        dvsgi::output::write_bytes(j, text.as_bytes())?;
+        write_json(j, &args, &ctx.info.name, &scene_path, &modes)?;
     }
     check_validation(&ctx)?;
     Ok(ok)
+}
+
+/// Bytes as MiB.
+fn mib(b: u64) -> f64 {
+    b as f64 / 1048576.0
+}
+
+/// Soak one mode, printing each sample and the growth after the first; the flag says whether
+/// every threshold held.
+fn soak_one_mode(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    mode: Mode,
+    o: &SoakOptions,
+    args: &Args,
+) -> dvsgi::Result<(ModeSoak, bool)> {
+    outln!("mode {}:", mode.name());
+    outln!("  frame   host ms/frame   RSS MiB   GPU alloc MiB (n)   GPU blocks MiB (n)   drift     validation");
+    let m = soak_mode(ctx, scene, mode, o, print_sample)?;
+    let rss = m.growth(|s| s.rss_bytes) as f64 / 1048576.0;
+    let gpu = m.growth(|s| s.gpu_allocated_bytes);
+    let blocks = m.growth(|s| s.gpu_block_bytes);
+    let allocs = m.growth(|s| s.gpu_allocations as u64);
+    outln!(
+        "  after the first sample: RSS {rss:+.2} MiB, GPU allocations {gpu:+} B ({allocs:+}), blocks {blocks:+} B; \
+         max drift {:.2e}; {:.1} s",
+        m.max_drift(),
+        m.seconds
+    );
+    let held = !(rss > args.max_rss_growth_mib
+        || gpu != 0
+        || blocks != 0
+        || allocs != 0
+        || f64::from(m.max_drift()) > args.max_drift);
+    if !held {
+        outln!("  FAILED: memory grew or the image drifted");
+    }
+    Ok((m, held))
+}
+
+/// One line of the sample table.
+fn print_sample(s: &Sample) {
+    outln!(
+        "  {:>6}  {:>12.2}   {:>8.1}   {:>9.3} ({:>3})      {:>9.3} ({:>2})      {:.2e}  {}",
+        s.frame,
+        s.host_ms,
+        mib(s.rss_bytes),
+        mib(s.gpu_allocated_bytes),
+        s.gpu_allocations,
+        mib(s.gpu_block_bytes),
+        s.gpu_blocks,
+        s.drift,
+        s.validation_messages
+    )
+}
+
+/// Write every mode's samples as JSON (schema dvsgi-soak/1) to `path`.
+fn write_json(path: &Path, args: &Args, device: &str, scene_path: &Path, modes: &[ModeSoak]) -> dvsgi::Result<()> {
+    let r = Report {
+        schema: "dvsgi-soak/1",
+        device: device.to_owned(),
+        scene: scene_path.display().to_string(),
+        settings: args.common.settings(),
+        width: args.width,
+        height: args.height,
+        frames: args.frames,
+        dt: args.dt,
+        modes,
+    };
+    let text = serde_json::to_string_pretty(&r).map_err(|e| dvsgi::Error::Usage(format!("JSON: {e}")))?;
+    dvsgi::output::write_bytes(path, text.as_bytes())?;
+    Ok(())
 }

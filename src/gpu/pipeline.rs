@@ -261,6 +261,184 @@ impl Spec {
     }
 }
 
+/// A shader module per stage of `desc`: vertex, then geometry and fragment when present.
+fn graphics_modules(
+    ctx: &Context,
+    name: &str,
+    desc: &GraphicsDesc,
+) -> GpuResult<Vec<(vk::ShaderStageFlags, vk::ShaderModule)>> {
+    let mut modules = vec![(vk::ShaderStageFlags::VERTEX, shader_module(ctx, name, desc.vert)?)];
+    if let Some(g) = desc.geom {
+        modules.push((vk::ShaderStageFlags::GEOMETRY, shader_module(ctx, name, g)?));
+    }
+    if let Some(f) = desc.frag {
+        modules.push((vk::ShaderStageFlags::FRAGMENT, shader_module(ctx, name, f)?));
+    }
+    Ok(modules)
+}
+
+/// Destroy the shader modules (once the pipeline is created, or creating it failed).
+fn destroy_modules(ctx: &Context, modules: &[(vk::ShaderStageFlags, vk::ShaderModule)]) {
+    for (_, m) in modules {
+        unsafe { ctx.device.destroy_shader_module(*m, None) };
+    }
+}
+
+/// The pipeline layout; if creating it fails, the modules are destroyed before the error returns.
+fn layout_or_destroy_modules(
+    ctx: &Context,
+    name: &str,
+    set_layouts: &[vk::DescriptorSetLayout],
+    push_size: u32,
+    modules: &[(vk::ShaderStageFlags, vk::ShaderModule)],
+) -> GpuResult<vk::PipelineLayout> {
+    pipeline_layout(ctx, name, set_layouts, push_size).inspect_err(|_| destroy_modules(ctx, modules))
+}
+
+/// The stage info of `module` (entry point `main`, with the specialization constants).
+fn shader_stage<'a>(
+    stage: vk::ShaderStageFlags,
+    module: vk::ShaderModule,
+    spec_info: &'a vk::SpecializationInfo<'a>,
+) -> vk::PipelineShaderStageCreateInfo<'a> {
+    vk::PipelineShaderStageCreateInfo::default()
+        .stage(stage)
+        .module(module)
+        .name(c"main")
+        .specialization_info(spec_info)
+}
+
+/// Fill the graphics pipeline's state from `desc` and create it (one `vkCreateGraphicsPipelines`).
+fn create_graphics_pipeline(
+    ctx: &Context,
+    desc: &GraphicsDesc,
+    modules: &[(vk::ShaderStageFlags, vk::ShaderModule)],
+    layout: vk::PipelineLayout,
+) -> Result<Vec<vk::Pipeline>, (Vec<vk::Pipeline>, vk::Result)> {
+    let spec = Spec::new(desc.spec);
+    let spec_info = spec.info();
+    let stages: Vec<_> = modules.iter().map(|(s, m)| shader_stage(*s, *m, &spec_info)).collect();
+    let vertex = VertexInput::of(desc.vertex_attributes);
+    let vertex_input = vertex.info();
+    let input_assembly =
+        vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+    let mut conservative = conservative_overestimate();
+    let raster = rasterization_state(ctx, desc, &mut conservative);
+    let multisample =
+        vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+    let depth = depth_stencil_state(desc);
+    let blend_attachments = opaque_blend_attachments(desc.color_formats);
+    let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+    let dynamic_states = dynamic_states(desc);
+    let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+    let mut rendering = vk::PipelineRenderingCreateInfo::default()
+        .color_attachment_formats(desc.color_formats)
+        .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED));
+    let info = vk::GraphicsPipelineCreateInfo::default()
+        .stages(&stages)
+        .vertex_input_state(&vertex_input)
+        .input_assembly_state(&input_assembly)
+        .viewport_state(&viewport)
+        .rasterization_state(&raster)
+        .multisample_state(&multisample)
+        .depth_stencil_state(&depth)
+        .color_blend_state(&blend)
+        .dynamic_state(&dynamic)
+        .layout(layout)
+        .push_next(&mut rendering);
+    unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
+}
+
+/// The vertex buffer layout (one binding of interleaved `scene_gpu::Vertex`) and the attributes
+/// the vertex shader reads, owned until the create call.
+struct VertexInput {
+    bindings: [vk::VertexInputBindingDescription; 1],
+    attributes: Vec<vk::VertexInputAttributeDescription>,
+}
+
+impl VertexInput {
+    /// Binding 0 with the attributes at `locations` (0 position, 1 normal, 2 uv).
+    fn of(locations: &[u32]) -> VertexInput {
+        let bindings = [vk::VertexInputBindingDescription {
+            binding: 0,
+            stride: std::mem::size_of::<crate::render::scene_gpu::Vertex>() as u32,
+            input_rate: vk::VertexInputRate::VERTEX,
+        }];
+        let attribute =
+            |location, format, offset| vk::VertexInputAttributeDescription { location, binding: 0, format, offset };
+        let all = [
+            attribute(0, vk::Format::R32G32B32_SFLOAT, 0),
+            attribute(1, vk::Format::R32G32B32_SFLOAT, 12),
+            attribute(2, vk::Format::R32G32_SFLOAT, 24),
+        ];
+        let attributes = all.into_iter().filter(|a| locations.contains(&a.location)).collect();
+        VertexInput { bindings, attributes }
+    }
+    fn info(&self) -> vk::PipelineVertexInputStateCreateInfo<'_> {
+        vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(&self.bindings)
+            .vertex_attribute_descriptions(&self.attributes)
+    }
+}
+
+/// Overestimating conservative rasterization, chained to the rasterization state when asked for.
+fn conservative_overestimate() -> vk::PipelineRasterizationConservativeStateCreateInfoEXT<'static> {
+    vk::PipelineRasterizationConservativeStateCreateInfoEXT::default()
+        .conservative_rasterization_mode(vk::ConservativeRasterizationModeEXT::OVERESTIMATE)
+        .extra_primitive_overestimation_size(0.0)
+}
+
+/// Filled triangles, counter-clockwise front faces; culling, depth bias and depth clamp from
+/// `desc` (clamp only where the device has it); `conservative` chained when asked for and supported.
+fn rasterization_state<'a>(
+    ctx: &Context,
+    desc: &GraphicsDesc,
+    conservative: &'a mut vk::PipelineRasterizationConservativeStateCreateInfoEXT<'static>,
+) -> vk::PipelineRasterizationStateCreateInfo<'a> {
+    let raster = vk::PipelineRasterizationStateCreateInfo::default()
+        .polygon_mode(vk::PolygonMode::FILL)
+        .cull_mode(desc.cull)
+        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+        .depth_bias_enable(desc.depth_bias)
+        .depth_clamp_enable(desc.depth_clamp && ctx.info.optional.depth_clamp)
+        .line_width(1.0);
+    if desc.conservative && ctx.info.optional.conservative_rasterization {
+        raster.push_next(conservative)
+    } else {
+        raster
+    }
+}
+
+/// Depth test and write as `desc` asks (never without a depth attachment), LESS_OR_EQUAL.
+fn depth_stencil_state(desc: &GraphicsDesc) -> vk::PipelineDepthStencilStateCreateInfo<'static> {
+    vk::PipelineDepthStencilStateCreateInfo::default()
+        .depth_test_enable(desc.depth_format.is_some() && desc.depth_test)
+        .depth_write_enable(desc.depth_format.is_some() && desc.depth_write)
+        .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL)
+}
+
+/// One blend state per color attachment: blending off, all channels written.
+fn opaque_blend_attachments(color_formats: &[vk::Format]) -> Vec<vk::PipelineColorBlendAttachmentState> {
+    color_formats
+        .iter()
+        .map(|_| {
+            vk::PipelineColorBlendAttachmentState::default()
+                .blend_enable(false)
+                .color_write_mask(vk::ColorComponentFlags::RGBA)
+        })
+        .collect()
+}
+
+/// Viewport and scissor are always dynamic; depth bias too when `desc` uses it.
+fn dynamic_states(desc: &GraphicsDesc) -> Vec<vk::DynamicState> {
+    let mut states = vec![vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+    if desc.depth_bias {
+        states.push(vk::DynamicState::DEPTH_BIAS);
+    }
+    states
+}
+
 impl Pipeline {
     pub fn compute(
         ctx: &Arc<Context>,
@@ -270,34 +448,15 @@ impl Pipeline {
         push_size: u32,
         spec: &[(u32, u32)],
     ) -> GpuResult<Pipeline> {
-        let d = &ctx.device;
-        let module = shader_module(ctx, name, spirv)?;
-        let layout = match pipeline_layout(ctx, name, set_layouts, push_size) {
-            Ok(l) => l,
-            Err(e) => {
-                unsafe { d.destroy_shader_module(module, None) };
-                return Err(e);
-            }
-        };
+        let modules = [(vk::ShaderStageFlags::COMPUTE, shader_module(ctx, name, spirv)?)];
+        let layout = layout_or_destroy_modules(ctx, name, set_layouts, push_size, &modules)?;
         let spec = Spec::new(spec);
         let spec_info = spec.info();
-        let stage = vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::COMPUTE)
-            .module(module)
-            .name(c"main")
-            .specialization_info(&spec_info);
+        let stage = shader_stage(modules[0].0, modules[0].1, &spec_info);
         let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
-        let result = unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
-        unsafe { d.destroy_shader_module(module, None) };
-        let raw = match result {
-            Ok(p) => p[0],
-            Err((_, e)) => {
-                unsafe { d.destroy_pipeline_layout(layout, None) };
-                return Err(crate::gpu::GpuError::Vk { call: "vkCreateComputePipelines", result: e });
-            }
-        };
-        ctx.name_object(raw, name);
-        Ok(Pipeline { ctx: ctx.clone(), raw, layout, bind_point: vk::PipelineBindPoint::COMPUTE })
+        let result = unsafe { ctx.device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
+        destroy_modules(ctx, &modules);
+        Pipeline::from_result(ctx, name, result, layout, vk::PipelineBindPoint::COMPUTE, "vkCreateComputePipelines")
     }
 
     pub fn graphics(
@@ -307,130 +466,32 @@ impl Pipeline {
         set_layouts: &[vk::DescriptorSetLayout],
         push_size: u32,
     ) -> GpuResult<Pipeline> {
-        let d = &ctx.device;
-        let mut modules = vec![(vk::ShaderStageFlags::VERTEX, shader_module(ctx, name, desc.vert)?)];
-        if let Some(g) = desc.geom {
-            modules.push((vk::ShaderStageFlags::GEOMETRY, shader_module(ctx, name, g)?));
-        }
-        if let Some(f) = desc.frag {
-            modules.push((vk::ShaderStageFlags::FRAGMENT, shader_module(ctx, name, f)?));
-        }
-        let destroy_modules = |mods: &[(vk::ShaderStageFlags, vk::ShaderModule)]| unsafe {
-            for (_, m) in mods {
-                d.destroy_shader_module(*m, None);
-            }
-        };
-        let layout = match pipeline_layout(ctx, name, set_layouts, push_size) {
-            Ok(l) => l,
-            Err(e) => {
-                destroy_modules(&modules);
-                return Err(e);
-            }
-        };
-        let spec = Spec::new(desc.spec);
-        let spec_info = spec.info();
-        let stages: Vec<_> = modules
-            .iter()
-            .map(|(s, m)| {
-                vk::PipelineShaderStageCreateInfo::default()
-                    .stage(*s)
-                    .module(*m)
-                    .name(c"main")
-                    .specialization_info(&spec_info)
-            })
-            .collect();
-        let bindings = [vk::VertexInputBindingDescription {
-            binding: 0,
-            stride: std::mem::size_of::<crate::render::scene_gpu::Vertex>() as u32,
-            input_rate: vk::VertexInputRate::VERTEX,
-        }];
-        let attributes = [
-            vk::VertexInputAttributeDescription {
-                location: 0,
-                binding: 0,
-                format: vk::Format::R32G32B32_SFLOAT,
-                offset: 0,
-            },
-            vk::VertexInputAttributeDescription {
-                location: 1,
-                binding: 0,
-                format: vk::Format::R32G32B32_SFLOAT,
-                offset: 12,
-            },
-            vk::VertexInputAttributeDescription {
-                location: 2,
-                binding: 0,
-                format: vk::Format::R32G32_SFLOAT,
-                offset: 24,
-            },
-        ];
-        let read: Vec<_> = attributes.into_iter().filter(|a| desc.vertex_attributes.contains(&a.location)).collect();
-        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
-            .vertex_binding_descriptions(&bindings)
-            .vertex_attribute_descriptions(&read);
-        let input_assembly =
-            vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
-        let mut conservative = vk::PipelineRasterizationConservativeStateCreateInfoEXT::default()
-            .conservative_rasterization_mode(vk::ConservativeRasterizationModeEXT::OVERESTIMATE)
-            .extra_primitive_overestimation_size(0.0);
-        let mut raster = vk::PipelineRasterizationStateCreateInfo::default()
-            .polygon_mode(vk::PolygonMode::FILL)
-            .cull_mode(desc.cull)
-            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-            .depth_bias_enable(desc.depth_bias)
-            .depth_clamp_enable(desc.depth_clamp && ctx.info.optional.depth_clamp)
-            .line_width(1.0);
-        if desc.conservative && ctx.info.optional.conservative_rasterization {
-            raster = raster.push_next(&mut conservative);
-        }
-        let multisample =
-            vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-            .depth_test_enable(desc.depth_format.is_some() && desc.depth_test)
-            .depth_write_enable(desc.depth_format.is_some() && desc.depth_write)
-            .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
-        let blend_attachments: Vec<_> = desc
-            .color_formats
-            .iter()
-            .map(|_| {
-                vk::PipelineColorBlendAttachmentState::default()
-                    .blend_enable(false)
-                    .color_write_mask(vk::ColorComponentFlags::RGBA)
-            })
-            .collect();
-        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
-        let mut dynamic_states = vec![vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-        if desc.depth_bias {
-            dynamic_states.push(vk::DynamicState::DEPTH_BIAS);
-        }
-        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-        let mut rendering = vk::PipelineRenderingCreateInfo::default()
-            .color_attachment_formats(desc.color_formats)
-            .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED));
-        let info = vk::GraphicsPipelineCreateInfo::default()
-            .stages(&stages)
-            .vertex_input_state(&vertex_input)
-            .input_assembly_state(&input_assembly)
-            .viewport_state(&viewport)
-            .rasterization_state(&raster)
-            .multisample_state(&multisample)
-            .depth_stencil_state(&depth)
-            .color_blend_state(&blend)
-            .dynamic_state(&dynamic)
-            .layout(layout)
-            .push_next(&mut rendering);
-        let result = unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) };
-        destroy_modules(&modules);
+        let modules = graphics_modules(ctx, name, desc)?;
+        let layout = layout_or_destroy_modules(ctx, name, set_layouts, push_size, &modules)?;
+        let result = create_graphics_pipeline(ctx, desc, &modules, layout);
+        destroy_modules(ctx, &modules);
+        Pipeline::from_result(ctx, name, result, layout, vk::PipelineBindPoint::GRAPHICS, "vkCreateGraphicsPipelines")
+    }
+
+    /// The pipeline from the result of `call` (a `vkCreate*Pipelines`), named; on failure the
+    /// layout is destroyed.
+    fn from_result(
+        ctx: &Arc<Context>,
+        name: &str,
+        result: Result<Vec<vk::Pipeline>, (Vec<vk::Pipeline>, vk::Result)>,
+        layout: vk::PipelineLayout,
+        bind_point: vk::PipelineBindPoint,
+        call: &'static str,
+    ) -> GpuResult<Pipeline> {
         let raw = match result {
             Ok(p) => p[0],
             Err((_, e)) => {
-                unsafe { d.destroy_pipeline_layout(layout, None) };
-                return Err(crate::gpu::GpuError::Vk { call: "vkCreateGraphicsPipelines", result: e });
+                unsafe { ctx.device.destroy_pipeline_layout(layout, None) };
+                return Err(crate::gpu::GpuError::Vk { call, result: e });
             }
         };
         ctx.name_object(raw, name);
-        Ok(Pipeline { ctx: ctx.clone(), raw, layout, bind_point: vk::PipelineBindPoint::GRAPHICS })
+        Ok(Pipeline { ctx: ctx.clone(), raw, layout, bind_point })
     }
 
     pub fn bind(&self, cmd: vk::CommandBuffer, sets: &[vk::DescriptorSet]) {

@@ -15,7 +15,7 @@ use crate::render::graph::{Pass, Use};
 use crate::render::passes::readback::{HostReadPass, ImageDownload};
 use crate::render::scene_gpu::{upload_buffer, MaterialTable};
 use crate::render::{lights, Mode, Scheduler};
-use crate::scene::Scene;
+use crate::scene::{Aabb, Scene};
 use ash::vk;
 use bvh::Bvh;
 use bytemuck::{Pod, Zeroable};
@@ -200,6 +200,146 @@ impl Pass for TracePass {
     }
 }
 
+impl TracePass {
+    /// The accumulators, descriptor set and pipeline that trace the uploaded scene into an
+    /// image of `size` pixels.
+    fn new(
+        ctx: &Arc<Context>,
+        materials: &MaterialTable,
+        uniform: Arc<Buffer>,
+        scene: SceneBuffers,
+        size: [u32; 2],
+    ) -> GpuResult<TracePass> {
+        let accum = accumulator(ctx, "reference sum", size)?;
+        let accum_sq = accumulator(ctx, "reference sum of squares", size)?;
+        let [material_bind, texture_bind] = materials.binds();
+        let set = DescriptorSet::new(
+            ctx,
+            "path trace",
+            vk::ShaderStageFlags::COMPUTE,
+            &[
+                Bind::Uniform(&uniform),
+                Bind::Storage(&scene.nodes),
+                Bind::Storage(&scene.tris),
+                Bind::Storage(&scene.shades),
+                material_bind,
+                Bind::Storage(&scene.lights),
+                texture_bind,
+                Bind::StorageImage(accum.view),
+                Bind::StorageImage(accum_sq.view),
+                materials.lod_sampler_bind(),
+            ],
+        )?;
+        let pipeline = Pipeline::compute(
+            ctx,
+            "path trace",
+            shaders::PT_TRACE_COMP,
+            &[set.layout],
+            8,
+            &[(0, materials.texture_count())],
+        )?;
+        Ok(TracePass {
+            buffers: vec![uniform, scene.nodes, scene.tris, scene.shades, scene.lights],
+            accum,
+            accum_sq,
+            pipeline,
+            set,
+            size,
+            next_sample: Cell::new(0),
+        })
+    }
+}
+
+/// One RGBA32F accumulator image of `size` pixels, written by the trace and copied out.
+fn accumulator(ctx: &Arc<Context>, name: &str, size: [u32; 2]) -> GpuResult<Arc<Image>> {
+    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+    let desc = ImageDesc::d2(vk::Format::R32G32B32A32_SFLOAT, size[0], size[1], usage);
+    Ok(Arc::new(Image::new(ctx, name, desc)?))
+}
+
+/// Refuse an image size the device cannot hold and a sample count of zero.
+fn check_request(ctx: &Context, width: u32, height: u32, options: &ReferenceOptions) -> GpuResult<()> {
+    let max2d = ctx.info.limits.max_image_dimension2_d;
+    if width == 0 || height == 0 || width > max2d || height > max2d {
+        return Err(crate::gpu::GpuError::Limit(format!(
+            "image size {width}x{height} is outside 1..={max2d} (this device's maxImageDimension2D)"
+        )));
+    }
+    if options.spp == 0 {
+        return Err(crate::gpu::GpuError::Limit("samples per pixel must be at least 1".into()));
+    }
+    Ok(())
+}
+
+/// The triangles in BVH order as the shader reads them: corners (material in `v0.w`) and
+/// shading attributes; one zeroed triangle when there are none (no empty buffers).
+fn gpu_triangles(tris: &Triangles, bvh: &Bvh) -> (Vec<GpuTri>, Vec<GpuTriShade>) {
+    let mut gpu_tris = Vec::with_capacity(tris.corners.len().max(1));
+    let mut shades = Vec::with_capacity(tris.corners.len().max(1));
+    for &i in &bvh.order {
+        let i = i as usize;
+        let [a, b, c] = tris.corners[i];
+        let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
+        gpu_tris.push(GpuTri { v0: v4(a, f32::from_bits(tris.materials[i])), v1: v4(b, 0.0), v2: v4(c, 0.0) });
+        let [n0, n1, n2] = tris.normals[i];
+        let [t0, t1, t2] = tris.uvs[i];
+        shades.push(GpuTriShade {
+            n0: v4(n0, 0.0),
+            n1: v4(n1, 0.0),
+            n2: v4(n2, 0.0),
+            uv01: [t0.x, t0.y, t1.x, t1.y],
+            uv2: [t2.x, t2.y, 0.0, 0.0],
+        });
+    }
+    if gpu_tris.is_empty() {
+        gpu_tris.push(GpuTri::zeroed());
+        shades.push(GpuTriShade::zeroed());
+    }
+    (gpu_tris, shades)
+}
+
+impl SceneBuffers {
+    /// Upload the BVH, the triangles and the scene's light table at the scene's time (`bounds`:
+    /// the world bounds then).
+    fn upload(ctx: &Arc<Context>, scene: &Scene, tris: &Triangles, bvh: &Bvh, bounds: Aabb) -> GpuResult<SceneBuffers> {
+        let s = &scene.settings;
+        let (gpu_tris, shades) = gpu_triangles(tris, bvh);
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let nodes = Arc::new(upload_buffer(ctx, "reference bvh", bytemuck::cast_slice(&bvh.nodes), storage)?);
+        let tris = Arc::new(upload_buffer(ctx, "reference triangles", bytemuck::cast_slice(&gpu_tris), storage)?);
+        let shades = Arc::new(upload_buffer(ctx, "reference shading", bytemuck::cast_slice(&shades), storage)?);
+        let (mut gpu_lights, _) = lights::build(scene, s.time, bounds, s.shadow_map_size, s.shadow_filter_radius);
+        let light_count = gpu_lights.len() as u32;
+        if gpu_lights.is_empty() {
+            gpu_lights.push(lights::GpuLight::default());
+        }
+        let lights = Arc::new(upload_buffer(ctx, "reference lights", bytemuck::cast_slice(&gpu_lights), storage)?);
+        Ok(SceneBuffers { nodes, tris, shades, lights, light_count })
+    }
+}
+
+/// The trace's parameters: the camera's inverse view-projection, the ray offset (scaled to
+/// the scene's `bounds`), the image size, lights, bounce limit, seed, jitter and triangle count.
+fn trace_params(
+    scene: &Scene,
+    options: &ReferenceOptions,
+    bounds: Aabb,
+    light_count: u32,
+    triangle_count: u32,
+) -> PtParams {
+    let s = &scene.settings;
+    let (width, height) = (s.width, s.height);
+    let cam = &scene.camera;
+    let view_proj = cam.projection(width as f32 / height as f32) * cam.view();
+    let extent = if bounds.is_empty() { 1.0 } else { bounds.extent().max_element().max(1e-6) };
+    PtParams {
+        inv_view_proj: view_proj.inverse().to_cols_array_2d(),
+        camera: [0.0, 0.0, 0.0, 1e-5 * extent],
+        size: [width, height, light_count, options.max_bounces.unwrap_or(UNLIMITED_BOUNCES).min(UNLIMITED_BOUNCES)],
+        info: [options.seed, (options.jitter || s.supersample > 1) as u32, triangle_count, 0],
+    }
+}
+
 /// A progressive path tracer for one scene.
 pub struct PathTracer {
     ctx: Arc<Context>,
@@ -216,107 +356,33 @@ pub struct PathTracer {
     pub bvh_depth: usize,
 }
 
+/// The scene data the trace shader reads, uploaded to storage buffers.
+struct SceneBuffers {
+    /// The BVH nodes.
+    nodes: Arc<Buffer>,
+    /// Triangle corners in BVH order (`GpuTri`).
+    tris: Arc<Buffer>,
+    /// Triangle normals and UVs in BVH order (`GpuTriShade`).
+    shades: Arc<Buffer>,
+    /// The light table (one unused light when the scene has none).
+    lights: Arc<Buffer>,
+    /// Lights in the scene (the table's length without the padding).
+    light_count: u32,
+}
+
 impl PathTracer {
     pub fn new(ctx: &Arc<Context>, scene: &Scene, options: ReferenceOptions) -> GpuResult<PathTracer> {
         let s = &scene.settings;
         let (width, height) = (s.width, s.height);
-        let max2d = ctx.info.limits.max_image_dimension2_d;
-        if width == 0 || height == 0 || width > max2d || height > max2d {
-            return Err(crate::gpu::GpuError::Limit(format!(
-                "image size {width}x{height} is outside 1..={max2d} (this device's maxImageDimension2D)"
-            )));
-        }
-        if options.spp == 0 {
-            return Err(crate::gpu::GpuError::Limit("samples per pixel must be at least 1".into()));
-        }
-        let t = s.time;
-        let tris = Triangles::of(scene, t);
+        check_request(ctx, width, height, &options)?;
+        let tris = Triangles::of(scene, s.time);
         let bvh = Bvh::build(&tris.corners);
-        let mut gpu_tris = Vec::with_capacity(tris.corners.len().max(1));
-        let mut shades = Vec::with_capacity(tris.corners.len().max(1));
-        for &i in &bvh.order {
-            let i = i as usize;
-            let [a, b, c] = tris.corners[i];
-            let v4 = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
-            gpu_tris.push(GpuTri { v0: v4(a, f32::from_bits(tris.materials[i])), v1: v4(b, 0.0), v2: v4(c, 0.0) });
-            let [n0, n1, n2] = tris.normals[i];
-            let [t0, t1, t2] = tris.uvs[i];
-            shades.push(GpuTriShade {
-                n0: v4(n0, 0.0),
-                n1: v4(n1, 0.0),
-                n2: v4(n2, 0.0),
-                uv01: [t0.x, t0.y, t1.x, t1.y],
-                uv2: [t2.x, t2.y, 0.0, 0.0],
-            });
-        }
-        if gpu_tris.is_empty() {
-            gpu_tris.push(GpuTri::zeroed());
-            shades.push(GpuTriShade::zeroed());
-        }
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let nodes = Arc::new(upload_buffer(ctx, "reference bvh", bytemuck::cast_slice(&bvh.nodes), storage)?);
-        let tri_buf = Arc::new(upload_buffer(ctx, "reference triangles", bytemuck::cast_slice(&gpu_tris), storage)?);
-        let shade_buf = Arc::new(upload_buffer(ctx, "reference shading", bytemuck::cast_slice(&shades), storage)?);
-        let bounds = scene.world_bounds(t);
-        let (mut gpu_lights, _) = lights::build(scene, t, bounds, s.shadow_map_size, s.shadow_filter_radius);
-        let light_count = gpu_lights.len() as u32;
-        if gpu_lights.is_empty() {
-            gpu_lights.push(lights::GpuLight::default());
-        }
-        let light_buf = Arc::new(upload_buffer(ctx, "reference lights", bytemuck::cast_slice(&gpu_lights), storage)?);
+        let bounds = scene.world_bounds(s.time);
+        let buffers = SceneBuffers::upload(ctx, scene, &tris, &bvh, bounds)?;
         let materials = MaterialTable::new(ctx, scene)?;
-
-        let cam = &scene.camera;
-        let view_proj = cam.projection(width as f32 / height as f32) * cam.view();
-        let extent = if bounds.is_empty() { 1.0 } else { bounds.extent().max_element().max(1e-6) };
-        let params = PtParams {
-            inv_view_proj: view_proj.inverse().to_cols_array_2d(),
-            camera: [0.0, 0.0, 0.0, 1e-5 * extent],
-            size: [width, height, light_count, options.max_bounces.unwrap_or(UNLIMITED_BOUNCES).min(UNLIMITED_BOUNCES)],
-            info: [options.seed, (options.jitter || s.supersample > 1) as u32, tris.corners.len() as u32, 0],
-        };
+        let params = trace_params(scene, &options, bounds, buffers.light_count, tris.corners.len() as u32);
         let uniform = Arc::new(Buffer::uniform(ctx, "reference parameters", &params)?);
-        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
-        let image = |name: &str| -> GpuResult<Arc<Image>> {
-            Ok(Arc::new(Image::new(ctx, name, ImageDesc::d2(vk::Format::R32G32B32A32_SFLOAT, width, height, usage))?))
-        };
-        let accum = image("reference sum")?;
-        let accum_sq = image("reference sum of squares")?;
-        let [material_bind, texture_bind] = materials.binds();
-        let set = DescriptorSet::new(
-            ctx,
-            "path trace",
-            vk::ShaderStageFlags::COMPUTE,
-            &[
-                Bind::Uniform(&uniform),
-                Bind::Storage(&nodes),
-                Bind::Storage(&tri_buf),
-                Bind::Storage(&shade_buf),
-                material_bind,
-                Bind::Storage(&light_buf),
-                texture_bind,
-                Bind::StorageImage(accum.view),
-                Bind::StorageImage(accum_sq.view),
-                materials.lod_sampler_bind(),
-            ],
-        )?;
-        let pipeline = Pipeline::compute(
-            ctx,
-            "path trace",
-            shaders::PT_TRACE_COMP,
-            &[set.layout],
-            8,
-            &[(0, materials.texture_count())],
-        )?;
-        let pass = TracePass {
-            buffers: vec![uniform, nodes, tri_buf, shade_buf, light_buf],
-            accum,
-            accum_sq,
-            pipeline,
-            set,
-            size: [width, height],
-            next_sample: Cell::new(0),
-        };
+        let pass = TracePass::new(ctx, &materials, uniform, buffers, [width, height])?;
         Ok(PathTracer {
             ctx: ctx.clone(),
             pass,

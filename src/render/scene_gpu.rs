@@ -261,12 +261,7 @@ pub fn upload_texture(
     // 0.9% of full scale, at the top of the range). Masks and heights are read from alpha,
     // which no sampler decodes, so they filter linearly at full 8-bit precision.
     if usage != TextureUse::Color {
-        let code: [u8; 256] = std::array::from_fn(|c| super::texture::encode_srgb(c as f32 / 255.0));
-        for level in &mut levels {
-            for p in level.rgba8.chunks_exact_mut(4) {
-                p[..3].iter_mut().for_each(|c| *c = code[*c as usize]);
-            }
-        }
+        srgb_encode_data(&mut levels);
     }
     let mut desc = ImageDesc::d2(
         vk::Format::R8G8B8A8_SRGB,
@@ -285,8 +280,27 @@ pub fn upload_texture(
         MemoryLocation::CpuToGpu,
     )?;
     staging.write(0, &bytes);
+    let regions = mip_copy_regions(&image, &levels);
+    record_texture_upload(ctx, name, &image, &staging, &regions)?;
+    Ok(image)
+}
+
+/// sRGB-encodes red, green and blue of every level (alpha stays as it is), so that the sRGB
+/// format's decode gives back a data texture's values.
+fn srgb_encode_data(levels: &mut [super::texture::MipLevel]) {
+    let code: [u8; 256] = std::array::from_fn(|c| super::texture::encode_srgb(c as f32 / 255.0));
+    for level in levels {
+        for p in level.rgba8.chunks_exact_mut(4) {
+            p[..3].iter_mut().for_each(|c| *c = code[*c as usize]);
+        }
+    }
+}
+
+/// One buffer-to-image copy per mip level, the levels packed one after another in the
+/// staging buffer.
+fn mip_copy_regions(image: &Image, levels: &[super::texture::MipLevel]) -> Vec<vk::BufferImageCopy> {
     let mut offset = 0u64;
-    let regions: Vec<vk::BufferImageCopy> = levels
+    levels
         .iter()
         .enumerate()
         .map(|(i, l)| {
@@ -300,7 +314,18 @@ pub fn upload_texture(
             offset += l.rgba8.len() as u64;
             region
         })
-        .collect();
+        .collect()
+}
+
+/// Records and runs the upload: to TRANSFER_DST, copy every level from `staging`, then to
+/// shader-read for the fragment and compute shaders.
+fn record_texture_upload(
+    ctx: &Arc<Context>,
+    name: &str,
+    image: &Image,
+    staging: &Buffer,
+    regions: &[vk::BufferImageCopy],
+) -> GpuResult<()> {
     let range = image.desc.full_range();
     ctx.one_shot(&format!("upload {name}"), |cmd| unsafe {
         let to_dst = barrier(&[Access::Nothing], &[Access::TransferWrite], true, true).unwrap();
@@ -313,7 +338,7 @@ pub fn upload_texture(
             staging.raw,
             image.raw,
             vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            &regions,
+            regions,
         );
         let to_read = barrier(
             &[Access::TransferWrite],
@@ -326,8 +351,7 @@ pub fn upload_texture(
             cmd,
             &vk::DependencyInfo::default().image_memory_barriers(&[to_read.image(image.raw, range)]),
         );
-    })?;
-    Ok(image)
+    })
 }
 
 fn mat_cols(m: Mat4) -> [[f32; 4]; 4] {

@@ -585,7 +585,23 @@ pub(crate) fn parse_value(s: &str) -> toml::Value {
         .unwrap_or_else(|| toml::Value::String(s.to_owned()))
 }
 
+/// Sets one `--set` key (`camera.fov_y`, `lights.0.intensity`) in the scene tree: walks to the
+/// table or list that holds it, then sets it there.
 fn apply_override(root: &mut toml::Value, path: &Path, key: &str, value: toml::Value) -> Result<(), SceneError> {
+    let walk = OverrideKey { path, key, segs: override_segments(key)? };
+    // `split` gives at least one segment.
+    let last = walk.segs.len() - 1;
+    let mut cur = root;
+    // The dotted path walked so far, with `#` for list indices (as `table_schema` takes it).
+    let mut norm: Vec<&str> = Vec::new();
+    for i in 0..last {
+        cur = walk.descend(cur, i, &mut norm)?;
+    }
+    walk.set(cur, last, &norm, value)
+}
+
+/// The dotted key's segments, none of them empty.
+fn override_segments(key: &str) -> Result<Vec<&str>, SceneError> {
     let segs: Vec<&str> = key.split('.').map(str::trim).collect();
     if segs.iter().any(|s| s.is_empty()) {
         return Err(SceneError::BadOverride {
@@ -593,121 +609,160 @@ fn apply_override(root: &mut toml::Value, path: &Path, key: &str, value: toml::V
             message: "empty component in the dotted key (expected e.g. camera.fov_y or lights.0.intensity)".into(),
         });
     }
-    let unknown = |done: &[&str], message: String, valid: Vec<String>| SceneError::UnknownKey {
-        path: path.to_path_buf(),
-        key: key.to_owned(),
-        at: if done.is_empty() { "<top level>".to_owned() } else { done.join(".") },
-        message,
-        valid,
-    };
-    let mut value = Some(value);
-    let mut cur = root;
-    let mut norm: Vec<&str> = Vec::new();
-    for (i, seg) in segs.iter().copied().enumerate() {
-        let done = &segs[..i];
-        let last = i + 1 == segs.len();
-        match cur {
-            toml::Value::Table(t) => {
-                let schema = table_schema(&norm.join("."));
-                let valid: Vec<String> = match &schema {
-                    Some(TableSchema::Keys(k)) => k.iter().map(|s| s.to_string()).collect(),
-                    _ => t.keys().cloned().collect(),
-                };
-                if !t.contains_key(seg) {
-                    let allowed = match &schema {
-                        Some(TableSchema::Keys(k)) => k.contains(&seg),
-                        Some(TableSchema::Free) => true,
-                        None => false,
-                    };
-                    if !allowed {
-                        return Err(unknown(done, format!("no key `{seg}`"), valid));
-                    }
-                    if !last {
-                        let mut child = norm.clone();
-                        child.push(seg);
-                        if table_schema(&child.join(".")).is_some() {
-                            t.insert(seg.to_owned(), toml::Value::Table(toml::Table::new()));
-                        } else {
-                            return Err(unknown(
-                                done,
-                                format!(
-                                    "`{seg}` is not set in the scene file, so nothing inside it can be set; set `{}` as a whole instead",
-                                    segs[..=i].join(".")
-                                ),
-                                valid,
-                            ));
-                        }
-                    }
-                }
-                if last {
-                    // A single value where a table of settings belongs names the keys.
-                    let mut child = norm.clone();
-                    child.push(seg);
-                    let keys: Option<Vec<String>> = match table_schema(&child.join(".")) {
-                        Some(TableSchema::Keys(k)) => Some(k.iter().map(|s| s.to_string()).collect()),
-                        _ => t.get(seg).and_then(|v| v.as_table()).map(|c| c.keys().cloned().collect()),
-                    };
-                    if let (Some(keys), Some(v)) = (keys, &value) {
-                        if !v.is_table() {
-                            let whole = segs[..=i].join(".");
-                            let example =
-                                keys.first().map(|k| format!(", e.g. --set {whole}.{k}=...")).unwrap_or_default();
-                            let message = format!(
-                                "`{whole}` is a table of settings, not one value; set one of its keys{example}"
-                            );
-                            return Err(unknown(&segs[..=i], message, keys));
-                        }
-                    }
-                    if let Some(v) = value.take() {
-                        t.insert(seg.to_owned(), v);
-                    }
-                    return Ok(());
-                }
-                norm.push(seg);
-                match t.get_mut(seg) {
-                    Some(next) => cur = next,
-                    None => return Err(unknown(done, format!("no key `{seg}`"), valid)),
-                }
-            }
-            toml::Value::Array(a) => {
-                let len = a.len();
-                let valid: Vec<String> = (0..len).map(|k| k.to_string()).collect();
-                let Ok(idx) = seg.parse::<usize>() else {
-                    return Err(unknown(
-                        done,
-                        format!("`{}` is a list; expected an index, found `{seg}`", done.join(".")),
-                        valid,
-                    ));
-                };
-                let Some(slot) = a.get_mut(idx) else {
-                    return Err(unknown(
-                        done,
-                        format!(
-                            "index {idx} is out of range (the list has {len} {})",
-                            if len == 1 { "entry" } else { "entries" }
-                        ),
-                        valid,
-                    ));
-                };
-                if last {
-                    if let Some(v) = value.take() {
-                        *slot = v;
-                    }
-                    return Ok(());
-                }
-                norm.push("#");
-                cur = slot;
-            }
-            _ => {
-                return Err(unknown(
-                    done,
-                    format!("`{}` is a value, not a table, so it has no `{seg}`", done.join(".")),
-                    Vec::new(),
-                ))
-            }
+    Ok(segs)
+}
+
+/// The keys a table may hold: its schema's, else the ones it has.
+fn valid_keys(schema: &Option<TableSchema>, t: &toml::Table) -> Vec<String> {
+    match schema {
+        Some(TableSchema::Keys(k)) => k.iter().map(|s| s.to_string()).collect(),
+        _ => t.keys().cloned().collect(),
+    }
+}
+
+/// The normalised dotted path of `seg` inside the table at `norm`.
+fn child_path(norm: &[&str], seg: &str) -> String {
+    let mut child = norm.to_vec();
+    child.push(seg);
+    child.join(".")
+}
+
+/// One `--set` key on its way into the scene tree, for the steps of the walk and their errors.
+struct OverrideKey<'a> {
+    path: &'a Path,
+    key: &'a str,
+    segs: Vec<&'a str>,
+}
+
+impl<'a> OverrideKey<'a> {
+    /// An unknown-key error found at the first `upto` segments of the key.
+    fn unknown(&self, upto: usize, message: String, valid: Vec<String>) -> SceneError {
+        let done = &self.segs[..upto];
+        SceneError::UnknownKey {
+            path: self.path.to_path_buf(),
+            key: self.key.to_owned(),
+            at: if done.is_empty() { "<top level>".to_owned() } else { done.join(".") },
+            message,
+            valid,
         }
     }
-    Ok(())
+
+    /// Steps from `cur` into its child named by segment `i`.
+    fn descend<'t>(
+        &self,
+        cur: &'t mut toml::Value,
+        i: usize,
+        norm: &mut Vec<&'a str>,
+    ) -> Result<&'t mut toml::Value, SceneError> {
+        match cur {
+            toml::Value::Table(t) => {
+                let next = self.table_child(t, i, norm)?;
+                norm.push(self.segs[i]);
+                Ok(next)
+            }
+            toml::Value::Array(a) => {
+                let next = self.list_slot(a, i)?;
+                norm.push("#");
+                Ok(next)
+            }
+            _ => Err(self.not_a_table(i)),
+        }
+    }
+
+    /// Sets segment `i`, the last, of `cur` to `value`.
+    fn set(&self, cur: &mut toml::Value, i: usize, norm: &[&str], value: toml::Value) -> Result<(), SceneError> {
+        match cur {
+            toml::Value::Table(t) => self.set_in_table(t, i, norm, value),
+            toml::Value::Array(a) => {
+                *self.list_slot(a, i)? = value;
+                Ok(())
+            }
+            _ => Err(self.not_a_table(i)),
+        }
+    }
+
+    /// An error unless the table at `norm` holds segment `i` or may hold it.
+    fn check_key(&self, t: &toml::Table, i: usize, norm: &[&str]) -> Result<(), SceneError> {
+        let seg = self.segs[i];
+        if t.contains_key(seg) {
+            return Ok(());
+        }
+        let schema = table_schema(&norm.join("."));
+        let allowed = match &schema {
+            Some(TableSchema::Keys(k)) => k.contains(&seg),
+            Some(TableSchema::Free) => true,
+            None => false,
+        };
+        if !allowed {
+            return Err(self.unknown(i, format!("no key `{seg}`"), valid_keys(&schema, t)));
+        }
+        Ok(())
+    }
+
+    /// The table's child named by segment `i`, started empty when the file leaves out a table
+    /// the schema has.
+    fn table_child<'t>(
+        &self,
+        t: &'t mut toml::Table,
+        i: usize,
+        norm: &[&str],
+    ) -> Result<&'t mut toml::Value, SceneError> {
+        let seg = self.segs[i];
+        self.check_key(t, i, norm)?;
+        if !t.contains_key(seg) && table_schema(&child_path(norm, seg)).is_none() {
+            return Err(self.unknown(
+                i,
+                format!(
+                    "`{seg}` is not set in the scene file, so nothing inside it can be set; set `{}` as a whole instead",
+                    self.segs[..=i].join(".")
+                ),
+                valid_keys(&table_schema(&norm.join(".")), t),
+            ));
+        }
+        Ok(t.entry(seg).or_insert_with(|| toml::Value::Table(toml::Table::new())))
+    }
+
+    /// Sets the table's key named by segment `i`; a single value where a table of settings
+    /// belongs is an error that names the keys.
+    fn set_in_table(&self, t: &mut toml::Table, i: usize, norm: &[&str], value: toml::Value) -> Result<(), SceneError> {
+        let seg = self.segs[i];
+        self.check_key(t, i, norm)?;
+        let keys: Option<Vec<String>> = match table_schema(&child_path(norm, seg)) {
+            Some(TableSchema::Keys(k)) => Some(k.iter().map(|s| s.to_string()).collect()),
+            _ => t.get(seg).and_then(|v| v.as_table()).map(|c| c.keys().cloned().collect()),
+        };
+        if let Some(keys) = keys {
+            if !value.is_table() {
+                let whole = self.segs[..=i].join(".");
+                let example = keys.first().map(|k| format!(", e.g. --set {whole}.{k}=...")).unwrap_or_default();
+                let message = format!("`{whole}` is a table of settings, not one value; set one of its keys{example}");
+                return Err(self.unknown(i + 1, message, keys));
+            }
+        }
+        t.insert(seg.to_owned(), value);
+        Ok(())
+    }
+
+    /// The list's entry at the index segment `i` names.
+    fn list_slot<'t>(&self, a: &'t mut toml::value::Array, i: usize) -> Result<&'t mut toml::Value, SceneError> {
+        let seg = self.segs[i];
+        let len = a.len();
+        let valid: Vec<String> = (0..len).map(|k| k.to_string()).collect();
+        let Ok(idx) = seg.parse::<usize>() else {
+            let message = format!("`{}` is a list; expected an index, found `{seg}`", self.segs[..i].join("."));
+            return Err(self.unknown(i, message, valid));
+        };
+        a.get_mut(idx).ok_or_else(|| {
+            let entries = if len == 1 { "entry" } else { "entries" };
+            self.unknown(i, format!("index {idx} is out of range (the list has {len} {entries})"), valid)
+        })
+    }
+
+    /// Segment `i` asked of a value that is no table.
+    fn not_a_table(&self, i: usize) -> SceneError {
+        let done = self.segs[..i].join(".");
+        self.unknown(i, format!("`{done}` is a value, not a table, so it has no `{}`", self.segs[i]), Vec::new())
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -721,7 +776,17 @@ struct Ctx<'a> {
     search_paths: Vec<PathBuf>,
 }
 
-impl Ctx<'_> {
+impl<'a> Ctx<'a> {
+    /// The context for the scene file at `path`: its directory, and its `[scene]
+    /// search_paths` taken from there.
+    fn new(path: &'a Path, scene: &SceneSection, opts: &'a LoadOptions) -> Self {
+        let dir = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        Ctx { path, search_paths: scene.search_paths.iter().map(|s| dir.join(s)).collect(), dir, opts }
+    }
+
     fn invalid(&self, key: impl Into<String>, message: impl Into<String>) -> SceneError {
         SceneError::InvalidValue { path: self.path.to_path_buf(), key: key.into(), message: message.into() }
     }
@@ -867,35 +932,55 @@ fn default_material() -> Material {
     Material::diffuse("default", Vec3::splat(0.8))
 }
 
-/// Validates `file` and loads everything it refers to.
+/// Validates `file` and loads everything it refers to, a section at a time in the order of
+/// the steps below (the first error found is the one reported).
 pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<Scene, SceneError> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let ctx = Ctx { path, search_paths: file.scene.search_paths.iter().map(|s| dir.join(s)).collect(), dir, opts };
+    let ctx = Ctx::new(path, &file.scene, opts);
+    let name = scene_name(path, &file.scene);
+    let bounds = scene_bounds(&ctx, &file.scene)?;
+    let camera = build_camera(&ctx, &file.camera)?;
+    let settings = build_render_settings(&ctx, &file.render, file.gi, &camera)?;
+    let mut textures = TextureSet::default();
+    let (mut materials, ids) = build_materials(&ctx, &file.materials, &mut textures)?;
+    let names = MaterialNames { ids, defs: &file.materials };
+    let (meshes, objects) = build_objects(&ctx, &file.objects, &names, &mut materials, &mut textures, settings.time)?;
+    let lights = build_lights(&ctx, &file.lights, settings.time)?;
+    Ok(Scene {
+        path: path.to_path_buf(),
+        name,
+        meshes,
+        objects,
+        materials,
+        textures: textures.textures,
+        camera,
+        lights,
+        settings,
+        bounds,
+    })
+}
 
-    // [scene]
-    let name = match &file.scene.name {
+/// `[scene] name`, else the file's name without its extension.
+fn scene_name(path: &Path, scene: &SceneSection) -> String {
+    match &scene.name {
         Some(n) if !n.is_empty() => n.clone(),
         _ => path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".to_owned()),
-    };
-    let bounds = match &file.scene.bounds {
-        None => None,
-        Some(b) => {
-            let min = ctx.finite("scene.bounds.min", b.min)?;
-            let max = ctx.finite("scene.bounds.max", b.max)?;
-            if min.cmpge(max).any() {
-                return Err(
-                    ctx.invalid("scene.bounds", format!("min {min} must be smaller than max {max} on every axis"))
-                );
-            }
-            Some(Aabb { min, max })
-        }
-    };
+    }
+}
 
-    // [camera]
-    let c = &file.camera;
+/// `[scene.bounds]`, checked: finite, and min below max on every axis.
+fn scene_bounds(ctx: &Ctx, scene: &SceneSection) -> Result<Option<Aabb>, SceneError> {
+    let Some(b) = &scene.bounds else { return Ok(None) };
+    let min = ctx.finite("scene.bounds.min", b.min)?;
+    let max = ctx.finite("scene.bounds.max", b.max)?;
+    if min.cmpge(max).any() {
+        return Err(ctx.invalid("scene.bounds", format!("min {min} must be smaller than max {max} on every axis")));
+    }
+    Ok(Some(Aabb { min, max }))
+}
+
+/// `[camera]`, checked: finite, a field of view, near and far that make a frustum, and a
+/// view direction with an up that is not along it.
+fn build_camera(ctx: &Ctx, c: &CameraDef) -> Result<Camera, SceneError> {
     let camera = Camera {
         position: ctx.finite("camera.position", c.position)?,
         target: ctx.finite("camera.target", c.target)?,
@@ -916,6 +1001,13 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
     if camera.far <= camera.near {
         return Err(ctx.invalid("camera.far", format!("{} must be greater than near ({})", camera.far, camera.near)));
     }
+    check_camera_aim(ctx, &camera)?;
+    Ok(camera)
+}
+
+/// The camera looks somewhere (target apart from position, at a finite distance) with an up
+/// that is not along its view.
+fn check_camera_aim(ctx: &Ctx, camera: &Camera) -> Result<(), SceneError> {
     let view_dir = camera.target - camera.position;
     if view_dir.length_squared() == 0.0 {
         return Err(ctx.invalid("camera.target", "camera position and target are the same point"));
@@ -929,32 +1021,13 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
     if view_dir.normalize().cross(camera.up.normalize_or_zero()).length_squared() < 1e-8 {
         return Err(ctx.invalid("camera.up", format!("up {} is zero or parallel to the view direction", camera.up)));
     }
+    Ok(())
+}
 
-    // [render]
-    let r = &file.render;
-    for (key, v) in [("render.width", r.width), ("render.height", r.height)] {
-        if !(1..=16384).contains(&v) {
-            return Err(ctx.invalid(key, format!("{v} is not in 1..=16384")));
-        }
-    }
-    if r.shadow_cascades > 4 {
-        return Err(ctx.invalid("render.shadow_cascades", format!("{} is not in 0..=4", r.shadow_cascades)));
-    }
-    if !(1..=4).contains(&r.supersample) {
-        return Err(ctx.invalid(
-            "render.supersample",
-            format!("{} is not in 1..=4 (samples per pixel: its square)", r.supersample),
-        ));
-    }
-    if r.width.max(r.height) * r.supersample > 16384 {
-        return Err(ctx.invalid(
-            "render.supersample",
-            format!("{} times the image size is over 16384 pixels on a side", r.supersample),
-        ));
-    }
-    if !(16..=8192).contains(&r.shadow_map_size) {
-        return Err(ctx.invalid("render.shadow_map_size", format!("{} is not in 16..=8192", r.shadow_map_size)));
-    }
+/// `[render]` with the `[gi]` settings, checked: sizes, the camera's matrices at this
+/// aspect, finite numbers, the GI settings, then the ranges of the numbers.
+fn build_render_settings(ctx: &Ctx, r: &RenderDef, gi: GiDef, camera: &Camera) -> Result<RenderSettings, SceneError> {
+    check_render_sizes(ctx, r)?;
     // The camera matrices the renderer builds must be finite (huge coordinates or an extreme
     // near/far can overflow even when every input is finite).
     let aspect = r.width as f32 / r.height as f32;
@@ -982,9 +1055,48 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         view_lod: ctx.scalar("render.view_lod", r.view_lod)?,
         view_direction: r.view_direction,
         supersample: r.supersample,
-        gi: file.gi.clone(),
+        gi: build_gi_settings(ctx, gi)?,
     };
-    settings.gi.validate().map_err(|(key, message)| ctx.invalid(format!("gi.{key}"), message))?;
+    check_render_ranges(ctx, &settings)?;
+    Ok(settings)
+}
+
+/// The image, supersampling, shadow cascade and shadow map sizes are in range.
+fn check_render_sizes(ctx: &Ctx, r: &RenderDef) -> Result<(), SceneError> {
+    for (key, v) in [("render.width", r.width), ("render.height", r.height)] {
+        if !(1..=16384).contains(&v) {
+            return Err(ctx.invalid(key, format!("{v} is not in 1..=16384")));
+        }
+    }
+    if r.shadow_cascades > 4 {
+        return Err(ctx.invalid("render.shadow_cascades", format!("{} is not in 0..=4", r.shadow_cascades)));
+    }
+    if !(1..=4).contains(&r.supersample) {
+        return Err(ctx.invalid(
+            "render.supersample",
+            format!("{} is not in 1..=4 (samples per pixel: its square)", r.supersample),
+        ));
+    }
+    if r.width.max(r.height) * r.supersample > 16384 {
+        return Err(ctx.invalid(
+            "render.supersample",
+            format!("{} times the image size is over 16384 pixels on a side", r.supersample),
+        ));
+    }
+    if !(16..=8192).contains(&r.shadow_map_size) {
+        return Err(ctx.invalid("render.shadow_map_size", format!("{} is not in 16..=8192", r.shadow_map_size)));
+    }
+    Ok(())
+}
+
+/// `[gi]`, checked by [`GiSettings::validate`]; its errors name `gi.<key>`.
+fn build_gi_settings(ctx: &Ctx, gi: GiDef) -> Result<GiSettings, SceneError> {
+    gi.validate().map_err(|(key, message)| ctx.invalid(format!("gi.{key}"), message))?;
+    Ok(gi)
+}
+
+/// The exposure, view LOD and shadow filter numbers are in range.
+fn check_render_ranges(ctx: &Ctx, settings: &RenderSettings) -> Result<(), SceneError> {
     if !(-64.0..=64.0).contains(&settings.exposure) {
         return Err(ctx.invalid("render.exposure", format!("{} is not in -64..=64 (EV stops)", settings.exposure)));
     }
@@ -997,12 +1109,18 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
     if settings.shadow_normal_bias < 0.0 {
         return Err(ctx.invalid("render.shadow_normal_bias", "must be >= 0"));
     }
+    Ok(())
+}
 
-    // [[materials]]
+/// `[[materials]]` with their textures loaded, and each one's index by name.
+fn build_materials(
+    ctx: &Ctx,
+    defs: &[MaterialDef],
+    textures: &mut TextureSet,
+) -> Result<(Vec<Material>, HashMap<String, u32>), SceneError> {
     let mut materials: Vec<Material> = Vec::new();
-    let mut textures = TextureSet::default();
     let mut by_name: HashMap<String, u32> = HashMap::new();
-    for (i, m) in file.materials.iter().enumerate() {
+    for (i, m) in defs.iter().enumerate() {
         let key = format!("materials.{i}");
         if m.name.is_empty() {
             return Err(ctx.invalid(format!("{key}.name"), "material name must not be empty"));
@@ -1010,169 +1128,114 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         if by_name.contains_key(&m.name) {
             return Err(ctx.invalid(format!("{key}.name"), format!("material `{}` is defined twice", m.name)));
         }
-        let shininess = ctx.scalar(&format!("{key}.shininess"), m.shininess)?;
-        if shininess < 0.0 {
-            return Err(ctx.invalid(format!("{key}.shininess"), "must be >= 0"));
-        }
-        let bump_scale = ctx.scalar(&format!("{key}.bump_scale"), m.bump_scale)?;
-        if m.normal_texture.is_some() && m.bump_texture.is_some() {
-            return Err(ctx.invalid(format!("{key}.bump_texture"), "give normal_texture or bump_texture, not both"));
-        }
-        let mut map = |field: &str, file: &Option<String>, kind: MapKind| -> Result<Option<u32>, SceneError> {
-            let Some(t) = file else { return Ok(None) };
-            let p = ctx.resolve(t)?;
-            let y_down = m.normal_maps == NormalMaps::DirectX;
-            Ok(Some(textures.index(&p, &format!("{} {key}.{field}", path.display()), kind, y_down)?))
-        };
-        let albedo_texture = map("albedo_texture", &m.albedo_texture, MapKind::Color)?;
-        let mask_texture = map("mask_texture", &m.mask_texture, MapKind::Mask)?;
-        let normal_texture = match map("normal_texture", &m.normal_texture, MapKind::Normal)? {
-            Some(t) => Some(t),
-            None => map("bump_texture", &m.bump_texture, MapKind::Height)?,
-        };
+        let material = build_material(ctx, &key, m, textures)?;
         by_name.insert(m.name.clone(), materials.len() as u32);
-        materials.push(Material {
-            name: m.name.clone(),
-            albedo: ctx.color(&format!("{key}.albedo"), m.albedo)?,
-            albedo_texture,
-            mask_texture,
-            normal_texture,
-            bump_scale,
-            specular: ctx.color(&format!("{key}.specular"), m.specular)?,
-            shininess,
-            emission: ctx.color(&format!("{key}.emission"), m.emission)?,
-        });
+        materials.push(material);
     }
-    let defined = || {
-        let mut v: Vec<&str> = file.materials.iter().map(|m| m.name.as_str()).collect();
+    Ok((materials, by_name))
+}
+
+/// One `[[materials]]` entry (at `key`), checked, with its textures loaded.
+fn build_material(ctx: &Ctx, key: &str, m: &MaterialDef, textures: &mut TextureSet) -> Result<Material, SceneError> {
+    let shininess = ctx.scalar(&format!("{key}.shininess"), m.shininess)?;
+    if shininess < 0.0 {
+        return Err(ctx.invalid(format!("{key}.shininess"), "must be >= 0"));
+    }
+    let bump_scale = ctx.scalar(&format!("{key}.bump_scale"), m.bump_scale)?;
+    if m.normal_texture.is_some() && m.bump_texture.is_some() {
+        return Err(ctx.invalid(format!("{key}.bump_texture"), "give normal_texture or bump_texture, not both"));
+    }
+    let y_down = m.normal_maps == NormalMaps::DirectX;
+    let mut map = |field: &str, file: &Option<String>, kind: MapKind| -> Result<Option<u32>, SceneError> {
+        let Some(t) = file else { return Ok(None) };
+        let p = ctx.resolve(t)?;
+        Ok(Some(textures.index(&p, &format!("{} {key}.{field}", ctx.path.display()), kind, y_down)?))
+    };
+    let albedo_texture = map("albedo_texture", &m.albedo_texture, MapKind::Color)?;
+    let mask_texture = map("mask_texture", &m.mask_texture, MapKind::Mask)?;
+    let normal_texture = match map("normal_texture", &m.normal_texture, MapKind::Normal)? {
+        Some(t) => Some(t),
+        None => map("bump_texture", &m.bump_texture, MapKind::Height)?,
+    };
+    Ok(Material {
+        name: m.name.clone(),
+        albedo: ctx.color(&format!("{key}.albedo"), m.albedo)?,
+        albedo_texture,
+        mask_texture,
+        normal_texture,
+        bump_scale,
+        specular: ctx.color(&format!("{key}.specular"), m.specular)?,
+        shininess,
+        emission: ctx.color(&format!("{key}.emission"), m.emission)?,
+    })
+}
+
+/// The `[[materials]]` names, for objects to refer to.
+struct MaterialNames<'a> {
+    ids: HashMap<String, u32>,
+    defs: &'a [MaterialDef],
+}
+
+impl MaterialNames<'_> {
+    /// The index of the material `name` that `key` refers to; an unknown one is an error that
+    /// lists those defined.
+    fn id(&self, ctx: &Ctx, key: String, name: &str) -> Result<u32, SceneError> {
+        self.ids
+            .get(name)
+            .copied()
+            .ok_or_else(|| ctx.invalid(key, format!("unknown material `{name}` ({})", self.defined())))
+    }
+
+    /// The defined names, sorted, for an error message.
+    fn defined(&self) -> String {
+        let mut v: Vec<&str> = self.defs.iter().map(|m| m.name.as_str()).collect();
         v.sort_unstable();
         if v.is_empty() {
             "none are defined; add a [[materials]] entry".to_owned()
         } else {
             format!("defined: {}", v.join(", "))
         }
-    };
-    let lookup = |key: String, name: &str| -> Result<u32, SceneError> {
-        by_name.get(name).copied().ok_or_else(|| ctx.invalid(key, format!("unknown material `{name}` ({})", defined())))
-    };
+    }
+}
 
-    // [[objects]]
+/// Each OBJ file loaded, per normal-map convention (which decides how its materials' maps
+/// load), with the scene material index of each of its MTL materials.
+type ObjCache = HashMap<(PathBuf, NormalMaps), (ObjData, Vec<Option<u32>>)>;
+
+/// `[[objects]]`: their meshes (a mesh per OBJ group) and the objects, checked to stay finite
+/// in world space at `time`; MTL materials and the default material are added to `materials`.
+fn build_objects(
+    ctx: &Ctx,
+    defs: &[ObjectDef],
+    names: &MaterialNames,
+    materials: &mut Vec<Material>,
+    textures: &mut TextureSet,
+    time: f32,
+) -> Result<(Vec<Mesh>, Vec<Object>), SceneError> {
     let mut meshes: Vec<Mesh> = Vec::new();
     let mut objects: Vec<Object> = Vec::new();
-    // Per file and normal-map convention (which decides how its materials' maps load).
-    let mut obj_cache: HashMap<(PathBuf, NormalMaps), (ObjData, Vec<Option<u32>>)> = HashMap::new();
+    let mut obj_cache = ObjCache::new();
     let mut default_mat: Option<u32> = None;
     // Objects with groups that have no material, said once after the loop (3000 objects must
     // not give 3000 warnings).
     let mut defaulted_objects: Vec<String> = Vec::new();
-    for (i, o) in file.objects.iter().enumerate() {
+    for (i, o) in defs.iter().enumerate() {
         let key = format!("objects.{i}");
-        let object_mat = match &o.material {
-            Some(m) => Some(lookup(format!("{key}.material"), m)?),
-            None => None,
-        };
-        let mut group_mats: BTreeMap<&str, u32> = BTreeMap::new();
-        for (g, m) in &o.materials {
-            group_mats.insert(g.as_str(), lookup(format!("{key}.materials.{g}"), m)?);
-        }
+        let (object_mat, group_mats) = object_materials(ctx, &key, o, names)?;
         let translate = ctx.finite(&format!("{key}.translate"), o.translate)?;
         let rotate = ctx.finite(&format!("{key}.rotate"), o.rotate)?;
         let scale = ctx.scale(&format!("{key}.scale"), o.scale)?;
-        let motion = match (&o.motion, &o.keyframes) {
-            (Some(_), Some(_)) => {
-                return Err(ctx.invalid(key.clone(), "an object can have `motion` or `keyframes`, not both"))
-            }
-            (Some(m), None) => ctx.motion(&format!("{key}.motion"), m)?,
-            (None, Some(keys)) => {
-                if keys.is_empty() {
-                    return Err(ctx.invalid(format!("{key}.keyframes"), "keyframe list is empty"));
-                }
-                let mut out = Vec::with_capacity(keys.len());
-                for (k, kf) in keys.iter().enumerate() {
-                    let kk = format!("{key}.keyframes.{k}");
-                    let time = ctx.scalar(&format!("{kk}.time"), kf.time)?;
-                    if let Some(prev) = out.last().map(|p: &Keyframe| p.time) {
-                        if time <= prev {
-                            return Err(ctx.invalid(
-                                format!("{kk}.time"),
-                                format!("keyframe times must increase ({time} follows {prev})"),
-                            ));
-                        }
-                    }
-                    out.push(Keyframe {
-                        time,
-                        translate: ctx.finite(&format!("{kk}.translate"), kf.translate)?,
-                        rotate_deg: ctx.finite(&format!("{kk}.rotate"), kf.rotate)?,
-                        scale: ctx.scale(&format!("{kk}.scale"), kf.scale)?,
-                    });
-                }
-                Motion::Keyframes(out)
-            }
-            (None, None) => Motion::None,
-        };
-        if !motion.is_static() && !o.dynamic {
-            return Err(ctx.invalid(
-                format!("{key}.dynamic"),
-                "an object with `motion` or `keyframes` must be marked `dynamic = true`",
-            ));
-        }
-
+        let motion = object_motion(ctx, &key, o)?;
         let obj_path = ctx.resolve(&o.obj)?;
-        let obj_key = (obj_path.clone(), o.normal_maps);
-        if !obj_cache.contains_key(&obj_key) {
-            let data = obj::load_obj(&obj_path)?;
-            // Bring this file's MTL materials into the scene (once per file).
-            let mut mtl_ids = Vec::with_capacity(data.materials.len());
-            for m in &data.materials {
-                mtl_ids.push(Some(materials.len() as u32));
-                materials.push(textures.mtl_material(m, o.normal_maps)?);
-            }
-            obj_cache.insert(obj_key.clone(), (data, mtl_ids));
-        }
-        let Some((data, mtl_ids)) = obj_cache.get(&obj_key) else {
-            continue;
-        };
-        for g in group_mats.keys() {
-            if !data.groups.iter().any(|x| x.name == *g) {
-                let mut names: Vec<&str> = data.groups.iter().map(|x| x.name.as_str()).collect();
-                names.sort_unstable();
-                names.dedup();
-                return Err(ctx.invalid(
-                    format!("{key}.materials.{g}"),
-                    format!("{} has no group `{g}`; its groups are: {}", obj_path.display(), names.join(", ")),
-                ));
-            }
-        }
-        let mut mesh_ids = Vec::with_capacity(data.groups.len());
-        let mut defaulted = Vec::new();
-        for g in &data.groups {
-            let mtl = g.material.and_then(|k| mtl_ids.get(k).copied().flatten());
-            let material = match (group_mats.get(g.name.as_str()), object_mat, mtl) {
-                (Some(&m), _, _) | (None, Some(m), _) | (None, None, Some(m)) => m,
-                (None, None, None) => {
-                    defaulted.push(g.name.as_str());
-                    *default_mat.get_or_insert_with(|| {
-                        materials.push(default_material());
-                        (materials.len() - 1) as u32
-                    })
-                }
-            };
-            mesh_ids.push(meshes.len() as u32);
-            meshes.push(Mesh {
-                name: g.name.clone(),
-                positions: g.positions.clone(),
-                normals: g.normals.clone(),
-                uvs: g.uvs.clone(),
-                indices: g.indices.clone(),
-                material,
-                bounds: g.bounds,
-            });
-        }
+        let (data, mtl_ids) = load_obj_once(&mut obj_cache, &obj_path, o.normal_maps, materials, textures)?;
+        check_groups_exist(ctx, &key, &obj_path, data, &group_mats)?;
+        let groups = GroupMaterials { by_group: &group_mats, object: object_mat, mtl: mtl_ids };
+        let (mesh_ids, defaulted) = add_group_meshes(data, &groups, &mut meshes, materials, &mut default_mat);
         if !defaulted.is_empty() {
             defaulted_objects.push(format!("{key} ({}): group(s) {}", obj_path.display(), defaulted.join(", ")));
         }
         if mesh_ids.is_empty() {
-            log::warn!("{}: {key}: {} contains no triangles", path.display(), obj_path.display());
+            log::warn!("{}: {key}: {} contains no triangles", ctx.path.display(), obj_path.display());
         }
         let object = Object {
             name: match &o.name {
@@ -1184,34 +1247,199 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
             dynamic: o.dynamic,
             motion,
         };
-        // Finite inputs can still overflow once transformed (a huge scale, a fast motion at
-        // a late render.time): the renderer must never see non-finite world positions.
-        let t = settings.time;
-        let m = object.model_matrix(t);
-        let finite = m.is_finite()
-            && object.meshes.iter().all(|&k| {
-                let b = meshes[k as usize].bounds.transformed(&m);
-                b.min.is_finite() && b.max.is_finite() && b.extent().is_finite()
-            });
-        if !finite {
-            return Err(ctx.invalid(
-                key,
-                format!(
-                    "{} transformed to world space at time {t} is not finite (scale, translation or motion too large)",
-                    obj_path.display()
-                ),
-            ));
-        }
+        check_object_finite(ctx, key, &obj_path, &object, &meshes, time)?;
         objects.push(object);
     }
+    warn_defaulted(ctx.path, &defaulted_objects);
+    Ok((meshes, objects))
+}
 
-    warn_defaulted(path, &defaulted_objects);
+/// The object's `material` and its per-group `materials`, as material indices.
+fn object_materials<'o>(
+    ctx: &Ctx,
+    key: &str,
+    o: &'o ObjectDef,
+    names: &MaterialNames,
+) -> Result<(Option<u32>, BTreeMap<&'o str, u32>), SceneError> {
+    let object_mat = match &o.material {
+        Some(m) => Some(names.id(ctx, format!("{key}.material"), m)?),
+        None => None,
+    };
+    let mut group_mats: BTreeMap<&str, u32> = BTreeMap::new();
+    for (g, m) in &o.materials {
+        group_mats.insert(g.as_str(), names.id(ctx, format!("{key}.materials.{g}"), m)?);
+    }
+    Ok((object_mat, group_mats))
+}
 
-    // [[lights]]
-    let mut lights = Vec::with_capacity(file.lights.len());
-    for (i, l) in file.lights.iter().enumerate() {
-        let l = light(&ctx, i, l)?;
-        let finite = match l.at_time(settings.time) {
+/// The object's `motion` or `keyframes` (not both); a moving object must be `dynamic`.
+fn object_motion(ctx: &Ctx, key: &str, o: &ObjectDef) -> Result<Motion, SceneError> {
+    let motion = match (&o.motion, &o.keyframes) {
+        (Some(_), Some(_)) => return Err(ctx.invalid(key, "an object can have `motion` or `keyframes`, not both")),
+        (Some(m), None) => ctx.motion(&format!("{key}.motion"), m)?,
+        (None, Some(keys)) => keyframes(ctx, key, keys)?,
+        (None, None) => Motion::None,
+    };
+    if !motion.is_static() && !o.dynamic {
+        return Err(ctx.invalid(
+            format!("{key}.dynamic"),
+            "an object with `motion` or `keyframes` must be marked `dynamic = true`",
+        ));
+    }
+    Ok(motion)
+}
+
+/// The object's `keyframes`: not empty, finite, and at increasing times.
+fn keyframes(ctx: &Ctx, key: &str, keys: &[KeyframeDef]) -> Result<Motion, SceneError> {
+    if keys.is_empty() {
+        return Err(ctx.invalid(format!("{key}.keyframes"), "keyframe list is empty"));
+    }
+    let mut out: Vec<Keyframe> = Vec::with_capacity(keys.len());
+    for (k, kf) in keys.iter().enumerate() {
+        let kk = format!("{key}.keyframes.{k}");
+        let time = ctx.scalar(&format!("{kk}.time"), kf.time)?;
+        if let Some(prev) = out.last().map(|p| p.time) {
+            if time <= prev {
+                return Err(
+                    ctx.invalid(format!("{kk}.time"), format!("keyframe times must increase ({time} follows {prev})"))
+                );
+            }
+        }
+        out.push(Keyframe {
+            time,
+            translate: ctx.finite(&format!("{kk}.translate"), kf.translate)?,
+            rotate_deg: ctx.finite(&format!("{kk}.rotate"), kf.rotate)?,
+            scale: ctx.scale(&format!("{kk}.scale"), kf.scale)?,
+        });
+    }
+    Ok(Motion::Keyframes(out))
+}
+
+/// The OBJ file at `obj_path`, loaded the first time it is asked for with these normal maps
+/// (its MTL materials then added to `materials`), with its materials' scene indices.
+fn load_obj_once<'c>(
+    cache: &'c mut ObjCache,
+    obj_path: &Path,
+    normal_maps: NormalMaps,
+    materials: &mut Vec<Material>,
+    textures: &mut TextureSet,
+) -> Result<&'c (ObjData, Vec<Option<u32>>), SceneError> {
+    match cache.entry((obj_path.to_path_buf(), normal_maps)) {
+        std::collections::hash_map::Entry::Occupied(e) => Ok(e.into_mut()),
+        std::collections::hash_map::Entry::Vacant(e) => {
+            let data = obj::load_obj(obj_path)?;
+            let mut mtl_ids = Vec::with_capacity(data.materials.len());
+            for m in &data.materials {
+                mtl_ids.push(Some(materials.len() as u32));
+                materials.push(textures.mtl_material(m, normal_maps)?);
+            }
+            Ok(e.insert((data, mtl_ids)))
+        }
+    }
+}
+
+/// Every group the object's `materials` names is a group of its OBJ file.
+fn check_groups_exist(
+    ctx: &Ctx,
+    key: &str,
+    obj_path: &Path,
+    data: &ObjData,
+    group_mats: &BTreeMap<&str, u32>,
+) -> Result<(), SceneError> {
+    for g in group_mats.keys() {
+        if !data.groups.iter().any(|x| x.name == *g) {
+            let mut names: Vec<&str> = data.groups.iter().map(|x| x.name.as_str()).collect();
+            names.sort_unstable();
+            names.dedup();
+            return Err(ctx.invalid(
+                format!("{key}.materials.{g}"),
+                format!("{} has no group `{g}`; its groups are: {}", obj_path.display(), names.join(", ")),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Where an object's groups get their material: its per-group `materials`, else its
+/// `material`, else the group's MTL material (by index in the file's MTL materials).
+struct GroupMaterials<'a> {
+    by_group: &'a BTreeMap<&'a str, u32>,
+    object: Option<u32>,
+    mtl: &'a [Option<u32>],
+}
+
+/// A mesh for each group of the OBJ file; groups with no material get the default one
+/// (added once). Gives the new meshes' indices and the groups defaulted.
+fn add_group_meshes<'d>(
+    data: &'d ObjData,
+    groups: &GroupMaterials,
+    meshes: &mut Vec<Mesh>,
+    materials: &mut Vec<Material>,
+    default_mat: &mut Option<u32>,
+) -> (Vec<u32>, Vec<&'d str>) {
+    let mut mesh_ids = Vec::with_capacity(data.groups.len());
+    let mut defaulted = Vec::new();
+    for g in &data.groups {
+        let mtl = g.material.and_then(|k| groups.mtl.get(k).copied().flatten());
+        let material = match (groups.by_group.get(g.name.as_str()), groups.object, mtl) {
+            (Some(&m), _, _) | (None, Some(m), _) | (None, None, Some(m)) => m,
+            (None, None, None) => {
+                defaulted.push(g.name.as_str());
+                *default_mat.get_or_insert_with(|| {
+                    materials.push(default_material());
+                    (materials.len() - 1) as u32
+                })
+            }
+        };
+        mesh_ids.push(meshes.len() as u32);
+        meshes.push(Mesh {
+            name: g.name.clone(),
+            positions: g.positions.clone(),
+            normals: g.normals.clone(),
+            uvs: g.uvs.clone(),
+            indices: g.indices.clone(),
+            material,
+            bounds: g.bounds,
+        });
+    }
+    (mesh_ids, defaulted)
+}
+
+/// The object's matrix and meshes' bounds at `time` are finite: finite inputs can still
+/// overflow once transformed (a huge scale, a fast motion at a late render.time), and the
+/// renderer must never see non-finite world positions.
+fn check_object_finite(
+    ctx: &Ctx,
+    key: String,
+    obj_path: &Path,
+    object: &Object,
+    meshes: &[Mesh],
+    time: f32,
+) -> Result<(), SceneError> {
+    let m = object.model_matrix(time);
+    let finite = m.is_finite()
+        && object.meshes.iter().all(|&k| {
+            let b = meshes[k as usize].bounds.transformed(&m);
+            b.min.is_finite() && b.max.is_finite() && b.extent().is_finite()
+        });
+    if !finite {
+        return Err(ctx.invalid(
+            key,
+            format!(
+                "{} transformed to world space at time {time} is not finite (scale, translation or motion too large)",
+                obj_path.display()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// `[[lights]]`, each checked to have a finite position and direction at `time`.
+fn build_lights(ctx: &Ctx, defs: &[LightDef], time: f32) -> Result<Vec<Light>, SceneError> {
+    let mut lights = Vec::with_capacity(defs.len());
+    for (i, l) in defs.iter().enumerate() {
+        let l = build_light(ctx, i, l)?;
+        let finite = match l.at_time(time) {
             LightKind::Point { position, .. } => position.is_finite(),
             LightKind::Directional { direction, .. } => direction.is_finite() && direction != Vec3::ZERO,
             LightKind::Spot { position, direction, .. } => {
@@ -1221,28 +1449,36 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         if !finite {
             return Err(ctx.invalid(
                 format!("lights.{i}"),
-                format!("the light's position or direction at time {} is not finite (motion too large)", settings.time),
+                format!("the light's position or direction at time {time} is not finite (motion too large)"),
             ));
         }
         lights.push(l);
     }
+    Ok(lights)
+}
 
-    Ok(Scene {
-        path: path.to_path_buf(),
-        name,
-        meshes,
-        objects,
-        materials,
-        textures: textures.textures,
-        camera,
-        lights,
-        settings,
-        bounds,
+/// One `[[lights]]` entry (number `i`), checked.
+fn build_light(ctx: &Ctx, i: usize, l: &LightDef) -> Result<Light, SceneError> {
+    let key = format!("lights.{i}");
+    check_light_keys(ctx, &key, l)?;
+    let kind = light_kind(ctx, &key, l)?;
+    let motion = match &l.motion {
+        Some(m) => ctx.motion(&format!("{key}.motion"), m)?,
+        None => Motion::None,
+    };
+    Ok(Light {
+        name: match &l.name {
+            Some(n) if !n.is_empty() => n.clone(),
+            _ => format!("{}{i}", l.kind),
+        },
+        kind,
+        cast_shadows: l.cast_shadows,
+        motion,
     })
 }
 
-fn light(ctx: &Ctx, i: usize, l: &LightDef) -> Result<Light, SceneError> {
-    let key = format!("lights.{i}");
+/// The light's `type` is known, and it has the keys that type needs and no others.
+fn check_light_keys(ctx: &Ctx, key: &str, l: &LightDef) -> Result<(), SceneError> {
     let (allowed, required): (&[&str], &[&str]) = match l.kind.as_str() {
         "point" => (&["position", "intensity"], &["position", "intensity"]),
         "directional" => (&["direction", "irradiance"], &["direction", "irradiance"]),
@@ -1280,60 +1516,56 @@ fn light(ctx: &Ctx, i: usize, l: &LightDef) -> Result<Light, SceneError> {
             return Err(ctx.invalid(format!("{key}.{k}"), format!("a {} light needs `{k}`", l.kind)));
         }
     }
+    Ok(())
+}
+
+/// The light's kind and its checked values (its keys already checked for its `type`).
+fn light_kind(ctx: &Ctx, key: &str, l: &LightDef) -> Result<LightKind, SceneError> {
     let get = |v: Option<[f32; 3]>| v.unwrap_or([0.0; 3]);
-    let direction = |ctx: &Ctx| -> Result<Vec3, SceneError> {
+    let direction = || -> Result<Vec3, SceneError> {
         let d = ctx.finite(&format!("{key}.direction"), get(l.direction))?;
         if d.length_squared() == 0.0 {
             return Err(ctx.invalid(format!("{key}.direction"), "direction must not be zero"));
         }
         Ok(d.normalize())
     };
-    let kind = match l.kind.as_str() {
+    Ok(match l.kind.as_str() {
         "point" => LightKind::Point {
             position: ctx.finite(&format!("{key}.position"), get(l.position))?,
             intensity: ctx.color(&format!("{key}.intensity"), get(l.intensity))?,
         },
         "directional" => LightKind::Directional {
-            direction: direction(ctx)?,
+            direction: direction()?,
             irradiance: ctx.color(&format!("{key}.irradiance"), get(l.irradiance))?,
         },
         _ => {
-            let inner = ctx.scalar(&format!("{key}.inner_angle"), l.inner_angle.unwrap_or(20.0))?;
-            let outer = ctx.scalar(&format!("{key}.outer_angle"), l.outer_angle.unwrap_or(30.0))?;
-            if !(0.0..90.0).contains(&outer) {
-                return Err(ctx.invalid(
-                    format!("{key}.outer_angle"),
-                    format!("{outer} is not in [0, 90) degrees (it is a half-angle)"),
-                ));
-            }
-            if !(0.0..=outer).contains(&inner) {
-                return Err(ctx.invalid(
-                    format!("{key}.inner_angle"),
-                    format!("{inner} must be in [0, outer_angle = {outer}] degrees"),
-                ));
-            }
+            let (inner, outer) = spot_angles(ctx, key, l)?;
             LightKind::Spot {
                 position: ctx.finite(&format!("{key}.position"), get(l.position))?,
-                direction: direction(ctx)?,
+                direction: direction()?,
                 intensity: ctx.color(&format!("{key}.intensity"), get(l.intensity))?,
                 inner_deg: inner,
                 outer_deg: outer,
             }
         }
-    };
-    let motion = match &l.motion {
-        Some(m) => ctx.motion(&format!("{key}.motion"), m)?,
-        None => Motion::None,
-    };
-    Ok(Light {
-        name: match &l.name {
-            Some(n) if !n.is_empty() => n.clone(),
-            _ => format!("{}{i}", l.kind),
-        },
-        kind,
-        cast_shadows: l.cast_shadows,
-        motion,
     })
+}
+
+/// A spot light's inner and outer half-angles in degrees: `outer` in [0, 90), `inner` in
+/// [0, outer].
+fn spot_angles(ctx: &Ctx, key: &str, l: &LightDef) -> Result<(f32, f32), SceneError> {
+    let inner = ctx.scalar(&format!("{key}.inner_angle"), l.inner_angle.unwrap_or(20.0))?;
+    let outer = ctx.scalar(&format!("{key}.outer_angle"), l.outer_angle.unwrap_or(30.0))?;
+    if !(0.0..90.0).contains(&outer) {
+        return Err(ctx
+            .invalid(format!("{key}.outer_angle"), format!("{outer} is not in [0, 90) degrees (it is a half-angle)")));
+    }
+    if !(0.0..=outer).contains(&inner) {
+        return Err(
+            ctx.invalid(format!("{key}.inner_angle"), format!("{inner} must be in [0, outer_angle = {outer}] degrees"))
+        );
+    }
+    Ok((inner, outer))
 }
 
 /// One warning for every object with groups that have no material (the first few named).

@@ -99,7 +99,7 @@ fn mtl_err(path: &Path, line: usize, message: impl std::fmt::Display) -> SceneEr
     SceneError::Mtl { path: path.to_path_buf(), message: format!("line {line}: {message}") }
 }
 
-/// Parses `n` numbers, all finite.
+/// Parses one number, which must be finite.
 fn parse_finite(tok: &str) -> Result<f32, String> {
     match tok.parse::<f32>() {
         Ok(x) if x.is_finite() => Ok(x),
@@ -187,148 +187,32 @@ fn logical_lines(text: &str) -> Vec<(usize, String, usize)> {
     out
 }
 
+/// What `prescan` counts: OBJ statements, and the vertices, texture coordinates and normals
+/// defined so far (what face indices may refer to).
+#[derive(Default)]
+struct ScanCounts {
+    statements: usize,
+    v: usize,
+    vt: usize,
+    vn: usize,
+}
+
 /// Validates every line `tobj` would interpret, with line numbers, and builds the canonical
 /// text for tobj (see [`Prescan::normalized`]). Keywords are read case-insensitively (`V`,
 /// `F` from some exporters); a file with no OBJ statement at all is refused.
 fn prescan(path: &Path, text: &str) -> Result<Prescan, SceneError> {
-    let (mut nv, mut nvt, mut nvn) = (0usize, 0usize, 0usize);
-    let mut statements = 0usize;
+    let mut counts = ScanCounts::default();
     let mut out =
         Prescan { mtllibs: Vec::new(), usemtl: BTreeSet::new(), normalized: String::with_capacity(text.len()) };
     for (i, (ln, raw, spans)) in logical_lines(text).into_iter().enumerate() {
         if i > 0 {
             out.normalized.push('\n');
         }
+        prescan_statement(path, ln, &raw, &mut counts, &mut out)?;
         // Lines joined by `\` become empty lines, so line numbers stay the same for tobj.
-        let pad = |out: &mut Prescan| (1..spans).for_each(|_| out.normalized.push('\n'));
-        let raw = raw.as_str();
-        let mut words = raw.split_whitespace();
-        let Some(word) = words.next() else {
-            pad(&mut out);
-            continue;
-        };
-        let kw_lower = word.to_ascii_lowercase();
-        let kw = kw_lower.as_str();
-        let args: Vec<&str> = values(&words.collect::<Vec<_>>());
-        // The rest of the line after the keyword (names may contain spaces), up to a comment.
-        let rest = strip_comment(&raw.trim_start()[word.len()..]).trim();
-        if is_statement(kw) {
-            statements += 1;
-        }
-        let emit = |out: &mut Prescan, vals: &[&str]| {
-            out.normalized.push_str(kw);
-            for v in vals {
-                out.normalized.push(' ');
-                out.normalized.push_str(v);
-            }
-        };
-        match kw {
-            "v" => {
-                if !matches!(args.len(), 3 | 4 | 6) {
-                    return Err(obj_err(
-                        path,
-                        ln,
-                        format!(
-                            "vertex position needs 3 coordinates (optionally followed by w or by r g b), found {} values",
-                            args.len()
-                        ),
-                    ));
-                }
-                let mut vals = Vec::with_capacity(args.len());
-                for a in &args {
-                    vals.push(parse_finite(a).map_err(|m| obj_err(path, ln, format!("vertex position: {m}")))?);
-                }
-                if args.len() == 4 {
-                    let w = vals[3];
-                    if w == 0.0
-                        || !(vals[0] / w).is_finite()
-                        || !(vals[1] / w).is_finite()
-                        || !(vals[2] / w).is_finite()
-                    {
-                        return Err(obj_err(path, ln, "vertex position: invalid w (zero or too small)"));
-                    }
-                }
-                // Vertex colours are not used (and tobj refuses files where only some
-                // vertices have them).
-                emit(&mut out, if args.len() == 6 { &args[..3] } else { &args });
-                nv += 1;
-            }
-            "vt" => {
-                let vals = &args;
-                if !(1..=3).contains(&vals.len()) {
-                    return Err(obj_err(
-                        path,
-                        ln,
-                        format!("texture coordinate needs 1 to 3 values (u, optionally v and w), found {}", vals.len()),
-                    ));
-                }
-                for a in vals {
-                    parse_finite(a).map_err(|m| obj_err(path, ln, format!("texture coordinate: {m}")))?;
-                }
-                // `vt u` (a 1D texture): v is 0.
-                let uv = [vals[0], vals.get(1).copied().unwrap_or("0")];
-                emit(&mut out, &uv);
-                nvt += 1;
-            }
-            "vn" => {
-                let vals = &args;
-                if vals.len() != 3 {
-                    return Err(obj_err(path, ln, format!("normal needs 3 values (x y z), found {}", vals.len())));
-                }
-                for a in vals {
-                    parse_finite(a).map_err(|m| obj_err(path, ln, format!("normal: {m}")))?;
-                }
-                emit(&mut out, vals);
-                nvn += 1;
-            }
-            "f" => {
-                if args.len() < 3 {
-                    return Err(obj_err(path, ln, format!("face needs at least 3 vertices, found {}", args.len())));
-                }
-                for a in &args {
-                    let parts: Vec<&str> = a.split('/').collect();
-                    if parts.len() > 3 {
-                        return Err(obj_err(
-                            path,
-                            ln,
-                            format!("face vertex `{a}` has more than 3 `/`-separated indices"),
-                        ));
-                    }
-                    let counts = [(nv, "vertex"), (nvt, "texture coordinate"), (nvn, "normal")];
-                    for (k, p) in parts.iter().enumerate() {
-                        if p.is_empty() {
-                            if k == 0 {
-                                return Err(obj_err(path, ln, format!("face vertex `{a}` has no position index")));
-                            }
-                            continue;
-                        }
-                        let (count, what) = counts[k];
-                        check_index(p, count, what).map_err(|m| obj_err(path, ln, m))?;
-                    }
-                }
-                emit(&mut out, &args);
-            }
-            "o" | "g" => emit(&mut out, &[rest]),
-            "mtllib" => {
-                if rest.is_empty() {
-                    return Err(obj_err(path, ln, "mtllib without a file name"));
-                }
-                out.mtllibs.push((ln, rest.to_owned()));
-                emit(&mut out, &[rest]);
-            }
-            "usemtl" => {
-                // An empty `usemtl` selects the default material, as other loaders do.
-                let name = if rest.is_empty() { DEFAULT_MATERIAL } else { rest };
-                out.usemtl.insert(name.to_owned());
-                emit(&mut out, &[name]);
-            }
-            // `l` (polylines, which tobj would triangulate), `p`, `s`, comments and anything
-            // unknown are left out.
-            _ => {}
-        }
-        pad(&mut out);
+        (1..spans).for_each(|_| out.normalized.push('\n'));
     }
-    if statements == 0 {
+    if counts.statements == 0 {
         return Err(SceneError::Obj {
             path: path.to_path_buf(),
             message: "no OBJ statement (v, vt, vn, f, o, g, mtllib, usemtl, ...) in the whole file; \
@@ -337,6 +221,152 @@ fn prescan(path: &Path, text: &str) -> Result<Prescan, SceneError> {
         });
     }
     Ok(out)
+}
+
+/// Checks one statement (line `ln`) and appends its canonical form to `out.normalized`
+/// (nothing for a blank line or a statement tobj should not see).
+fn prescan_statement(
+    path: &Path,
+    ln: usize,
+    raw: &str,
+    counts: &mut ScanCounts,
+    out: &mut Prescan,
+) -> Result<(), SceneError> {
+    let mut words = raw.split_whitespace();
+    let Some(word) = words.next() else { return Ok(()) };
+    let kw_lower = word.to_ascii_lowercase();
+    let kw = kw_lower.as_str();
+    let args: Vec<&str> = values(&words.collect::<Vec<_>>());
+    // The rest of the line after the keyword (names may contain spaces), up to a comment.
+    let rest = strip_comment(&raw.trim_start()[word.len()..]).trim();
+    if is_statement(kw) {
+        counts.statements += 1;
+    }
+    let err = |m: String| obj_err(path, ln, m);
+    let text = &mut out.normalized;
+    match kw {
+        "v" => {
+            check_position(&args).map_err(err)?;
+            // Vertex colours are not used (and tobj refuses files where only some
+            // vertices have them).
+            emit(text, kw, if args.len() == 6 { &args[..3] } else { &args });
+            counts.v += 1;
+        }
+        "vt" => {
+            emit(text, kw, &check_texcoord(&args).map_err(err)?);
+            counts.vt += 1;
+        }
+        "vn" => {
+            check_normal(&args).map_err(err)?;
+            emit(text, kw, &args);
+            counts.vn += 1;
+        }
+        "f" => {
+            check_face(&args, counts).map_err(err)?;
+            emit(text, kw, &args);
+        }
+        "o" | "g" => emit(text, kw, &[rest]),
+        "mtllib" => {
+            if rest.is_empty() {
+                return Err(obj_err(path, ln, "mtllib without a file name"));
+            }
+            out.mtllibs.push((ln, rest.to_owned()));
+            emit(text, kw, &[rest]);
+        }
+        "usemtl" => {
+            // An empty `usemtl` selects the default material, as other loaders do.
+            let name = if rest.is_empty() { DEFAULT_MATERIAL } else { rest };
+            out.usemtl.insert(name.to_owned());
+            emit(text, kw, &[name]);
+        }
+        // `l` (polylines, which tobj would triangulate), `p`, `s`, comments and anything
+        // unknown are left out.
+        _ => {}
+    }
+    Ok(())
+}
+
+/// Appends a statement in canonical form: the keyword and its values, single-spaced.
+fn emit(text: &mut String, kw: &str, vals: &[&str]) {
+    text.push_str(kw);
+    for v in vals {
+        text.push(' ');
+        text.push_str(v);
+    }
+}
+
+/// Parses every value of a statement, all finite; an error names `what`.
+fn parse_all(args: &[&str], what: &str) -> Result<Vec<f32>, String> {
+    args.iter().map(|a| parse_finite(a).map_err(|m| format!("{what}: {m}"))).collect()
+}
+
+/// Checks a `v` statement's values: x y z, optionally followed by w or by r g b.
+fn check_position(args: &[&str]) -> Result<(), String> {
+    if !matches!(args.len(), 3 | 4 | 6) {
+        return Err(format!(
+            "vertex position needs 3 coordinates (optionally followed by w or by r g b), found {} values",
+            args.len()
+        ));
+    }
+    let vals = parse_all(args, "vertex position")?;
+    if let [x, y, z, w] = vals[..] {
+        if w == 0.0 || !(x / w).is_finite() || !(y / w).is_finite() || !(z / w).is_finite() {
+            return Err("vertex position: invalid w (zero or too small)".to_owned());
+        }
+    }
+    Ok(())
+}
+
+/// Checks a `vt` statement's values and returns the (u, v) handed to tobj.
+fn check_texcoord<'a>(args: &[&'a str]) -> Result<[&'a str; 2], String> {
+    if !(1..=3).contains(&args.len()) {
+        return Err(format!("texture coordinate needs 1 to 3 values (u, optionally v and w), found {}", args.len()));
+    }
+    parse_all(args, "texture coordinate")?;
+    // `vt u` (a 1D texture): v is 0.
+    Ok([args[0], args.get(1).copied().unwrap_or("0")])
+}
+
+/// Checks a `vn` statement's values: x y z.
+fn check_normal(args: &[&str]) -> Result<(), String> {
+    if args.len() != 3 {
+        return Err(format!("normal needs 3 values (x y z), found {}", args.len()));
+    }
+    parse_all(args, "normal")?;
+    Ok(())
+}
+
+/// Checks an `f` statement: at least 3 vertices, each index referring to something defined
+/// before this line.
+fn check_face(args: &[&str], counts: &ScanCounts) -> Result<(), String> {
+    if args.len() < 3 {
+        return Err(format!("face needs at least 3 vertices, found {}", args.len()));
+    }
+    let defined = [(counts.v, "vertex"), (counts.vt, "texture coordinate"), (counts.vn, "normal")];
+    for a in args {
+        check_face_vertex(a, &defined)?;
+    }
+    Ok(())
+}
+
+/// Checks one face vertex `v`, `v/vt`, `v//vn` or `v/vt/vn` against the (count, noun) of
+/// positions, texture coordinates and normals defined so far.
+fn check_face_vertex(a: &str, defined: &[(usize, &str); 3]) -> Result<(), String> {
+    let parts: Vec<&str> = a.split('/').collect();
+    if parts.len() > 3 {
+        return Err(format!("face vertex `{a}` has more than 3 `/`-separated indices"));
+    }
+    for (k, p) in parts.iter().enumerate() {
+        if p.is_empty() {
+            if k == 0 {
+                return Err(format!("face vertex `{a}` has no position index"));
+            }
+            continue;
+        }
+        let (count, what) = defined[k];
+        check_index(p, count, what)?;
+    }
+    Ok(())
 }
 
 /// Whether `kw` (lower case) is an OBJ statement (interpreted here or not).
@@ -436,14 +466,10 @@ fn join_paths(v: &[PathBuf]) -> String {
     v.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", ")
 }
 
+/// A colour statement's value: r g b, or one number for all three; finite and >= 0. `args`
+/// stop at an inline comment ("Kd 1 0 0 # red"), as [`values`] gives them.
 fn parse_color(path: &Path, ln: usize, key: &str, args: &[&str]) -> Result<Vec3, SceneError> {
-    // Inline comments ("Kd 1 0 0 # red") are allowed.
-    let args: Vec<&str> = args.iter().copied().take_while(|a| !a.starts_with('#')).collect();
-    let vals = args
-        .iter()
-        .map(|a| parse_finite(a))
-        .collect::<Result<Vec<f32>, String>>()
-        .map_err(|m| mtl_err(path, ln, format!("{key}: {m}")))?;
+    let vals = parse_all(args, key).map_err(|m| mtl_err(path, ln, m))?;
     let c = match vals.as_slice() {
         [r] => Vec3::splat(*r),
         [r, g, b] => Vec3::new(*r, *g, *b),
@@ -538,39 +564,74 @@ pub(crate) fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
         message,
     })?;
     let scan = prescan(path, &text)?;
-    let dir = path.parent().unwrap_or(Path::new("."));
+    let libs = load_mtllibs(path, &scan.mtllibs)?;
+    warn_unknown_materials(path, &scan, &libs);
+    let models = parse_with_tobj(path, &scan.normalized, &libs.for_tobj)?;
+    let mut groups = Vec::new();
+    for model in models {
+        if let Some(group) = obj_group(path, model, libs.materials.len())? {
+            groups.push(group);
+        }
+    }
+    Ok(ObjData { groups, materials: libs.materials })
+}
 
-    // Material libraries, in the order tobj will ask for them.
-    let mut materials: Vec<MtlMaterial> = Vec::new();
-    let mut libs: Vec<tobj::MTLLoadResult> = Vec::new();
-    let mut missing_libs = false;
-    for (ln, name) in &scan.mtllibs {
-        let (found, tried) = find_relative(dir, name);
-        let Some(mtl_path) = found else {
-            if let Some(there) = tried.iter().find(|p| super::text::exists(p)) {
-                // It is there but no regular file: say what it is, not "not found".
-                super::text::check_regular(there, super::text::MAX_ASSET_BYTES)?;
-            }
-            // A missing library is common in downloaded models: warn, and its materials fall
-            // back to the default (as other loaders do).
-            log::warn!(
-                "{}: line {ln}: material library `{name}` not found (looked at {}); its materials use the default",
-                path.display(),
-                join_paths(&tried)
-            );
-            libs.push(Ok((Vec::new(), Default::default())));
-            missing_libs = true;
+/// The material libraries of an OBJ file.
+struct MtlLibs {
+    /// The materials of all libraries, in file order.
+    materials: Vec<MtlMaterial>,
+    /// What tobj gets for each `mtllib`, in the order it asks for them.
+    for_tobj: Vec<tobj::MTLLoadResult>,
+    /// Some library was not found (and was warned about).
+    missing: bool,
+}
+
+/// Reads and parses every `mtllib` (line, name); a missing library is warned about and
+/// contributes no materials.
+fn load_mtllibs(path: &Path, mtllibs: &[(usize, String)]) -> Result<MtlLibs, SceneError> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut libs = MtlLibs { materials: Vec::new(), for_tobj: Vec::new(), missing: false };
+    for (ln, name) in mtllibs {
+        let Some(mats) = load_mtllib(path, dir, *ln, name)? else {
+            libs.for_tobj.push(Ok((Vec::new(), Default::default())));
+            libs.missing = true;
             continue;
         };
-        let mats = parse_mtl(&mtl_path, &read_mtl(&mtl_path)?)?;
         let map = mats.iter().enumerate().map(|(k, m)| (m.name.clone(), k)).collect();
         let tmats = mats.iter().map(|m| tobj::Material { name: m.name.clone(), ..Default::default() }).collect();
-        libs.push(Ok((tmats, map)));
-        materials.extend(mats);
+        libs.for_tobj.push(Ok((tmats, map)));
+        libs.materials.extend(mats);
     }
-    let known: BTreeSet<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+    Ok(libs)
+}
+
+/// The materials of the library `name` (named on line `ln` of `path`, relative to `dir`), or
+/// `None` (warned about) where it is not found.
+fn load_mtllib(path: &Path, dir: &Path, ln: usize, name: &str) -> Result<Option<Vec<MtlMaterial>>, SceneError> {
+    let (found, tried) = find_relative(dir, name);
+    let Some(mtl_path) = found else {
+        if let Some(there) = tried.iter().find(|p| super::text::exists(p)) {
+            // It is there but no regular file: say what it is, not "not found".
+            super::text::check_regular(there, super::text::MAX_ASSET_BYTES)?;
+        }
+        // A missing library is common in downloaded models: warn, and its materials fall
+        // back to the default (as other loaders do).
+        log::warn!(
+            "{}: line {ln}: material library `{name}` not found (looked at {}); its materials use the default",
+            path.display(),
+            join_paths(&tried)
+        );
+        return Ok(None);
+    };
+    Ok(Some(parse_mtl(&mtl_path, &read_mtl(&mtl_path)?)?))
+}
+
+/// Warns about `usemtl` names no library defines (unless a library was missing, which was
+/// already said).
+fn warn_unknown_materials(path: &Path, scan: &Prescan, libs: &MtlLibs) {
+    let known: BTreeSet<&str> = libs.materials.iter().map(|m| m.name.as_str()).collect();
     let named: Vec<&String> = scan.usemtl.iter().filter(|u| u.as_str() != DEFAULT_MATERIAL).collect();
-    if missing_libs {
+    if libs.missing {
         // Already said.
     } else if scan.mtllibs.is_empty() && !named.is_empty() {
         log::warn!(
@@ -588,9 +649,11 @@ pub(crate) fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
             }
         }
     }
+}
 
-    let text = scan.normalized;
-
+/// Hands the canonical OBJ text to tobj, which groups it and de-duplicates indices; `libs`
+/// answers its `mtllib` requests in order.
+fn parse_with_tobj(path: &Path, text: &str, libs: &[tobj::MTLLoadResult]) -> Result<Vec<tobj::Model>, SceneError> {
     let next = Cell::new(0usize);
     // `..Default::default()` covers fields that exist only with some tobj features.
     #[allow(clippy::needless_update)]
@@ -612,67 +675,65 @@ pub(crate) fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
         }
     })
     .map_err(|e| SceneError::Obj { path: path.to_path_buf(), message: format!("cannot parse OBJ: {e}") })?;
+    Ok(models)
+}
 
-    let mut groups = Vec::new();
-    for model in models {
-        let m = model.mesh;
-        if m.indices.is_empty() {
-            continue;
-        }
-        let n = m.positions.len() / 3;
-        let positions: Vec<Vec3> = m.positions.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
-        if let Some(p) = positions.iter().find(|p| !p.is_finite()) {
-            return Err(SceneError::Obj {
-                path: path.to_path_buf(),
-                message: format!("group `{}`: non-finite vertex position {p}", model.name),
-            });
-        }
-        let indices = super::triangulate::triangulate_faces(&positions, &m.indices, &m.face_arities);
-        if indices.len() % 3 != 0 {
-            return Err(SceneError::Obj {
-                path: path.to_path_buf(),
-                message: format!("group `{}`: index count is not a multiple of 3", model.name),
-            });
-        }
-        if let Some(bad) = indices.iter().find(|&&i| i as usize >= n) {
-            return Err(SceneError::Obj {
-                path: path.to_path_buf(),
-                message: format!("group `{}`: vertex index {bad} out of range ({n} vertices)", model.name),
-            });
-        }
-        let uvs: Vec<Vec2> = if m.texcoords.len() == 2 * n {
-            m.texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], 1.0 - c[1])).collect()
-        } else {
-            if !m.texcoords.is_empty() {
-                log::warn!(
-                    "{}: group `{}` has texture coordinates on only some vertices; using zeros",
-                    path.display(),
-                    model.name
-                );
-            }
-            vec![Vec2::ZERO; n]
-        };
-        let normals = if m.normals.len() == 3 * n {
-            Some(m.normals.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect::<Vec<_>>())
-        } else {
-            if !m.normals.is_empty() {
-                log::warn!(
-                    "{}: group `{}` has normals on only some vertices; generating smooth normals",
-                    path.display(),
-                    model.name
-                );
-            }
-            None
-        };
-        let (positions, normals, uvs, indices) = finish_normals(positions, normals, uvs, indices);
-        let mut bounds = Aabb::EMPTY;
-        for p in &positions {
-            bounds.grow(*p);
-        }
-        let material = m.material_id.filter(|&id| id < materials.len());
-        groups.push(ObjGroup { name: model.name, positions, normals, uvs, indices, material, bounds });
+/// Turns a tobj model into a triangulated group with unit normals; `None` for a model
+/// without faces. A material id of `n_materials` or more becomes `None`.
+fn obj_group(path: &Path, model: tobj::Model, n_materials: usize) -> Result<Option<ObjGroup>, SceneError> {
+    let m = model.mesh;
+    if m.indices.is_empty() {
+        return Ok(None);
     }
-    Ok(ObjData { groups, materials })
+    let err = |message: String| SceneError::Obj {
+        path: path.to_path_buf(),
+        message: format!("group `{}`: {message}", model.name),
+    };
+    let n = m.positions.len() / 3;
+    let positions: Vec<Vec3> = m.positions.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+    if let Some(p) = positions.iter().find(|p| !p.is_finite()) {
+        return Err(err(format!("non-finite vertex position {p}")));
+    }
+    let indices = super::triangulate::triangulate_faces(&positions, &m.indices, &m.face_arities);
+    if indices.len() % 3 != 0 {
+        return Err(err("index count is not a multiple of 3".to_owned()));
+    }
+    if let Some(bad) = indices.iter().find(|&&i| i as usize >= n) {
+        return Err(err(format!("vertex index {bad} out of range ({n} vertices)")));
+    }
+    let uvs = group_uvs(path, &model.name, &m.texcoords, n);
+    let normals = group_normals(path, &model.name, &m.normals, n);
+    let (positions, normals, uvs, indices) = finish_normals(positions, normals, uvs, indices);
+    let mut bounds = Aabb::EMPTY;
+    for p in &positions {
+        bounds.grow(*p);
+    }
+    let material = m.material_id.filter(|&id| id < n_materials);
+    Ok(Some(ObjGroup { name: model.name, positions, normals, uvs, indices, material, bounds }))
+}
+
+/// The `n` texture coordinates of group `name`, v flipped to a top-left origin; zeros (with a
+/// warning where only some vertices have them) unless every vertex has one.
+fn group_uvs(path: &Path, name: &str, texcoords: &[f32], n: usize) -> Vec<Vec2> {
+    if texcoords.len() == 2 * n {
+        return texcoords.chunks_exact(2).map(|c| Vec2::new(c[0], 1.0 - c[1])).collect();
+    }
+    if !texcoords.is_empty() {
+        log::warn!("{}: group `{name}` has texture coordinates on only some vertices; using zeros", path.display());
+    }
+    vec![Vec2::ZERO; n]
+}
+
+/// The `n` normals of group `name`, or `None` (to be generated; with a warning where only
+/// some vertices have them) unless every vertex has one.
+fn group_normals(path: &Path, name: &str, normals: &[f32], n: usize) -> Option<Vec<Vec3>> {
+    if normals.len() == 3 * n {
+        return Some(normals.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect());
+    }
+    if !normals.is_empty() {
+        log::warn!("{}: group `{name}` has normals on only some vertices; generating smooth normals", path.display());
+    }
+    None
 }
 
 /// Area-weighted face normals, in f64 so that edges of huge (but finite) coordinates do not

@@ -461,6 +461,7 @@ fn asset_paths_and_search_paths_resolve() {
     assert_eq!(s.name, "s");
 }
 
+// Long: a table of bad scene files, each with the words its error must contain.
 #[test]
 fn invalid_values() {
     let dir = tempfile::tempdir().unwrap();
