@@ -15,6 +15,8 @@ pub enum Error {
     Plot(#[from] crate::pareto::PlotError),
     #[error(transparent)]
     Sweep(#[from] crate::sweep::SweepError),
+    #[error(transparent)]
+    View(#[from] crate::view::ViewError),
     /// Vulkan validation reported errors (only when validation is on).
     #[error("Vulkan validation reported {0} error(s); see the messages above")]
     Validation(u32),

@@ -17,5 +17,6 @@ pub mod render;
 pub mod scene;
 pub mod soak;
 pub mod sweep;
+pub mod view;
 
 pub use error::{Error, Result};

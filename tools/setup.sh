@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs everything dvsgi needs on Debian 12 / Ubuntu 22.04+ (run as root or with sudo):
 # the Vulkan loader, lavapipe (CPU Vulkan), the Khronos validation layer, vulkaninfo, and the
-# shaderc/glslang/SPIRV-Tools static libraries that build.rs compiles the GLSL with.
+# shaderc/glslang/SPIRV-Tools static libraries that build.rs compiles the GLSL with, and for
+# `dvsgi view`'s tests a virtual X display (Xvfb, xvfb-run) with the X libraries winit opens.
 # A Rust toolchain (rustup, 1.80 or newer) must already be installed.
 #
 # lavapipe must be Mesa 25 or newer: it brings sparse residency (the sparse voxel volumes),
@@ -14,6 +15,7 @@ packages=(
   mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers vulkan-tools
   libshaderc-dev glslang-dev spirv-tools
   build-essential pkg-config
+  xvfb xauth libx11-xcb1 libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6
 )
 
 sudo=""

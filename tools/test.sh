@@ -13,7 +13,7 @@ cargo build --locked -p dvsgi-split-queues
 cargo test --locked "$@"
 cargo test --locked -p dvsgi-split-queues "$@"
 for order in compute-first graphics-first; do
-  echo "test.sh: the schedule tests (cone tracing, RSM, LPV, the mix), synchronization validation and bench on the split device ($order)"
+  echo "test.sh: the schedule tests (cone tracing, RSM, LPV, the mix), synchronization validation, bench and the viewer on the split device ($order)"
   export DVSGI_SPLIT_QUEUES_ORDER="$order"
   tools/with-split-queues.sh cargo test --locked "$@" --test schedule
   tools/with-split-queues.sh cargo test --locked "$@" --test rsm -- \
@@ -21,4 +21,6 @@ for order in compute-first graphics-first; do
   tools/with-split-queues.sh cargo test --locked "$@" --test cli --test bench -- \
     every_schedule_is_clean_under_queue_submit_synchronization_validation \
     info_reports_device_and_queue_topology bench_smoke
+  tools/with-split-queues.sh cargo test --locked "$@" --test view -- \
+    a_capture_is_what_render_makes_of_the_scene_file_it_writes
 done

@@ -102,6 +102,40 @@ enum Command {
         #[arg(long, short)]
         verbose: bool,
     },
+    /// Open a window on the scene: fly or orbit the camera, change the technique, its knobs,
+    /// the schedule and the preset live, and read each pass's GPU time on both queues.
+    /// F12 captures the frame (PNG, EXR), the window and the settings (a scene file that
+    /// `dvsgi render` reproduces). Needs a display (X11 or Wayland; or xvfb-run).
+    #[command(after_help = "Keys: WASD fly, Q/E down/up, Shift faster, right-drag look (fly), left-drag \
+orbit, wheel zoom, R reset camera, P pause time, F12 capture.
+
+Script (--script FILE), one command per line:
+  frames N | camera PX PY PZ TX TY TZ | turn YAW PITCH (degrees) | fly F R U SECONDS
+  orbit | fly-mode | set KEY=VALUE | gi MODE | view NAME | schedule MODE | preset NAME
+  pause | play | capture STEM | resize W H | memory | quit
+The viewer exits at the end of the script; each script frame advances scene time 1/30 s.")]
+    View {
+        /// Scene file (TOML; see scenes/FORMAT.md).
+        scene: PathBuf,
+        #[command(flatten)]
+        size: SizeArgs,
+        /// Queue schedule to start with: sync | async | async-lagged.
+        #[arg(long, default_value = "async")]
+        schedule: Mode,
+        /// Drive the viewer from a file of commands instead of input (tests, figures).
+        #[arg(long)]
+        script: Option<PathBuf>,
+        /// Window width in pixels.
+        #[arg(long, default_value_t = 1280)]
+        window_width: u32,
+        /// Window height in pixels.
+        #[arg(long, default_value_t = 800)]
+        window_height: u32,
+        /// Present in step with the display (FIFO); by default frames are presented as fast as
+        /// they come (mailbox or immediate), so the frame time is the renderer's.
+        #[arg(long)]
+        vsync: bool,
+    },
     /// Compare a rendered image with a reference (both linear-radiance .exr): RMSE and relMSE
     /// on radiance, FLIP and SSIM on the display images (exposure and tone map as given).
     Compare {
@@ -247,12 +281,12 @@ fn run(cli: Cli) -> dvsgi::Result<()> {
                 dvsgi::reference::ReferenceOptions { spp, max_bounces: bounces, seed, jitter, ..Default::default() };
             reference(&cli.common, &scene, &out, options, size.overrides())
         }
+        Command::View { scene, size, schedule, script, window_width, window_height, vsync } => {
+            let window = (window_width.max(1), window_height.max(1));
+            let opts = dvsgi::view::ViewOptions { scene, schedule, window, vsync, size: size.overrides() };
+            dvsgi::view::run(&cli.common, opts, script.as_deref())
+        }
         Command::Render { scene, out, size, view, gi, schedule, frames, verbose } => {
-            // Fail on unwritable targets before doing any work.
-            for o in &out {
-                dvsgi::output::check_target(o)?;
-            }
-            dvsgi::output::check_targets(&out)?;
             let mut extra = size.overrides();
             if let Some(v) = view {
                 extra.push(("render.view".to_string(), format!("{v:?}")));
@@ -260,43 +294,65 @@ fn run(cli: Cli) -> dvsgi::Result<()> {
             if let Some(g) = gi {
                 extra.push(("gi.mode".to_string(), format!("{g:?}")));
             }
-            let scene = cli.common.load_scene(&scene, &extra)?;
-            let ctx = cli.common.context()?;
-            let t = scene.settings.time;
-            let options = RenderOptions { mode: schedule, ..RenderOptions::default() };
-            let mut renderer = Renderer::with_options(&ctx, scene, options)?;
-            outln!("schedule: {}", schedule_line(&ctx, schedule));
-            for _ in 1..frames {
-                renderer.render(t, false)?;
-            }
-            let stats = renderer.render(t, true)?;
-            if verbose {
-                outln!("device: {} ({})", ctx.info.name, ctx.info.driver_info);
-                outln!("passes: {}", renderer.last_pass_names().join(" -> "));
-                let sched = renderer.scheduler();
-                for s in sched.submits() {
-                    let wait =
-                        s.wait.map(|w| format!(", waits for {} {w}", s.queue.other().name())).unwrap_or_default();
-                    outln!("  submit {} {}{wait}: {}", s.queue.name(), s.signal, s.passes.join(", "));
-                }
-                for b in sched.log() {
-                    outln!("  {b}");
-                }
-                outln!("frame: {:.2} ms host wall clock (record + submit + wait)", stats.host_ms);
-                if let Some(timing) = &stats.timing {
-                    for p in &timing.passes {
-                        outln!("  {:<22} {:<8} {:>8.3} ms GPU timestamps", p.name, p.queue.name(), p.gpu_ms());
-                    }
-                }
-            }
-            check_validation(&ctx)?;
-            let frame = renderer.output();
-            let files = out
-                .iter()
-                .map(|o| Ok((o.as_path(), dvsgi::output::encode_frame(o, &frame)?)))
-                .collect::<dvsgi::Result<Vec<_>>>()?;
-            dvsgi::cli::write_outputs(&files)?;
-            Ok(())
+            render(&cli.common, &scene, &out, &extra, schedule, frames, verbose)
+        }
+    }
+}
+
+/// `dvsgi render`: `frames` frames at the scene's time, the last one written to `out`.
+fn render(
+    common: &CommonArgs,
+    scene: &std::path::Path,
+    out: &[PathBuf],
+    extra: &[(String, String)],
+    schedule: Mode,
+    frames: u32,
+    verbose: bool,
+) -> dvsgi::Result<()> {
+    // Fail on unwritable targets before doing any work.
+    for o in out {
+        dvsgi::output::check_target(o)?;
+    }
+    dvsgi::output::check_targets(out)?;
+    let scene = common.load_scene(scene, extra)?;
+    let ctx = common.context()?;
+    let t = scene.settings.time;
+    let options = RenderOptions { mode: schedule, ..RenderOptions::default() };
+    let mut renderer = Renderer::with_options(&ctx, scene, options)?;
+    outln!("schedule: {}", schedule_line(&ctx, schedule));
+    for _ in 1..frames {
+        renderer.render(t, false)?;
+    }
+    let stats = renderer.render(t, true)?;
+    if verbose {
+        print_frame(&ctx, &renderer, &stats);
+    }
+    check_validation(&ctx)?;
+    let frame = renderer.output();
+    let files = out
+        .iter()
+        .map(|o| Ok((o.as_path(), dvsgi::output::encode_frame(o, &frame)?)))
+        .collect::<dvsgi::Result<Vec<_>>>()?;
+    dvsgi::cli::write_outputs(&files)?;
+    Ok(())
+}
+
+/// `render --verbose`: the passes, the submits, the barriers and the timings of the frame.
+fn print_frame(ctx: &Context, renderer: &Renderer, stats: &dvsgi::render::FrameStats) {
+    outln!("device: {} ({})", ctx.info.name, ctx.info.driver_info);
+    outln!("passes: {}", renderer.last_pass_names().join(" -> "));
+    let sched = renderer.scheduler();
+    for s in sched.submits() {
+        let wait = s.wait.map(|w| format!(", waits for {} {w}", s.queue.other().name())).unwrap_or_default();
+        outln!("  submit {} {}{wait}: {}", s.queue.name(), s.signal, s.passes.join(", "));
+    }
+    for b in sched.log() {
+        outln!("  {b}");
+    }
+    outln!("frame: {:.2} ms host wall clock (record + submit + wait)", stats.host_ms);
+    if let Some(timing) = &stats.timing {
+        for p in &timing.passes {
+            outln!("  {:<22} {:<8} {:>8.3} ms GPU timestamps", p.name, p.queue.name(), p.gpu_ms());
         }
     }
 }

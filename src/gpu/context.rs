@@ -212,7 +212,9 @@ fn cstr_field(bytes: &[std::ffi::c_char]) -> String {
 
 /// The instance, with the validation layer (and synchronization validation) when asked, and
 /// whether VK_EXT_debug_utils is there (object names, labels, the validation messenger).
-fn create_instance(entry: &ash::Entry, validation: bool) -> GpuResult<(ash::Instance, bool)> {
+/// The instance, with the validation layer when asked for and the instance extensions a window
+/// surface needs (`window`, empty when headless); also whether it has VK_EXT_debug_utils.
+fn create_instance(entry: &ash::Entry, validation: bool, window: &[&CStr]) -> GpuResult<(ash::Instance, bool)> {
     let app_name = c"dvsgi";
     let app = vk::ApplicationInfo::default()
         .application_name(app_name)
@@ -236,6 +238,16 @@ fn create_instance(entry: &ash::Entry, validation: bool) -> GpuResult<(ash::Inst
     }
     if has_debug_utils {
         extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+    }
+    for name in window {
+        if !ext_props.iter().any(|e| e.extension_name_as_c_str() == Ok(*name)) {
+            return Err(GpuError::NoDevice(format!(
+                "the Vulkan loader has no {} (needed to show a window): install your platform's Vulkan \
+                 WSI support, or render headless with `dvsgi render`",
+                name.to_string_lossy()
+            )));
+        }
+        extensions.push(name.as_ptr());
     }
     let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
     let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
@@ -323,7 +335,8 @@ struct Negotiated {
 }
 
 impl Negotiated {
-    fn of(instance: &ash::Instance, pd: vk::PhysicalDevice) -> GpuResult<Negotiated> {
+    /// With `present`, VK_KHR_swapchain is required (a window shows the frames).
+    fn of(instance: &ash::Instance, pd: vk::PhysicalDevice, present: bool) -> GpuResult<Negotiated> {
         let exts =
             unsafe { instance.enumerate_device_extension_properties(pd) }.vk("vkEnumerateDeviceExtensionProperties")?;
         let has_ext =
@@ -376,6 +389,16 @@ impl Negotiated {
         }
         if optional.ray_query {
             extensions.extend(ray_exts);
+        }
+        if present {
+            if !has_ext(ash::khr::swapchain::NAME) {
+                return Err(GpuError::NoDevice(
+                    "the device has no VK_KHR_swapchain, so it cannot show a window; render headless with \
+                     `dvsgi render`, or choose another device with --device"
+                        .into(),
+                ));
+            }
+            extensions.push(ash::khr::swapchain::NAME);
         }
         Ok(Negotiated {
             optional,
@@ -448,11 +471,18 @@ pub struct DeviceCandidate {
 
 impl Context {
     pub fn new(desc: &ContextDesc) -> GpuResult<std::sync::Arc<Context>> {
+        Context::with_window(desc, &[])
+    }
+
+    /// A context that can present to a window: `window` names the instance extensions the
+    /// window's surface needs (`ash_window::enumerate_required_extensions`), and the device
+    /// gets VK_KHR_swapchain.
+    pub fn with_window(desc: &ContextDesc, window: &[&'static CStr]) -> GpuResult<std::sync::Arc<Context>> {
         let validation = desc.validation || env_flag("DVSGI_VALIDATION");
         let device_req = desc.device.clone().or_else(|| std::env::var("DVSGI_DEVICE").ok());
         let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::Loader(e.to_string()))?;
 
-        let (instance, has_debug_utils) = create_instance(&entry, validation)?;
+        let (instance, has_debug_utils) = create_instance(&entry, validation, window)?;
         let counts = Box::new(ValidationCounts::default());
         let (debug_instance, messenger) =
             match (has_debug_utils && validation).then(|| create_messenger(&entry, &instance, &counts)).transpose()? {
@@ -475,8 +505,8 @@ impl Context {
             Ok(p) => p,
             Err(e) => return Err(cleanup(e)),
         };
-        let result =
-            Self::create_device(entry.clone(), instance.clone(), physical, chosen, validation, has_debug_utils);
+        let present = !window.is_empty();
+        let result = Self::create_device(instance.clone(), physical, chosen, present, has_debug_utils);
         match result {
             Ok((device, debug_utils, gq, cq, topology, info)) => {
                 // Buffer device addresses are on where ray queries are (acceleration structures).
@@ -644,16 +674,15 @@ impl Context {
 
     #[allow(clippy::type_complexity)]
     fn create_device(
-        _entry: ash::Entry,
         instance: ash::Instance,
         pd: vk::PhysicalDevice,
         index: usize,
-        _validation: bool,
+        present: bool,
         has_debug_utils: bool,
     ) -> GpuResult<(ash::Device, Option<ash::ext::debug_utils::Device>, Queue, Queue, QueueTopology, DeviceInfo)> {
         let fams = unsafe { instance.get_physical_device_queue_family_properties(pd) };
         let plan = QueuePlan::of(&fams)?;
-        let n = Negotiated::of(&instance, pd)?;
+        let n = Negotiated::of(&instance, pd, present)?;
         let priorities = [1.0f32, 1.0];
         let second = plan.topology == QueueTopology::SecondQueueSameFamily;
         let mut queue_infos = vec![vk::DeviceQueueCreateInfo::default()

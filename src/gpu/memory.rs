@@ -37,20 +37,8 @@ impl Buffer {
         check_allocation(ctx, name, size)?;
         let raw = unsafe { d.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         let req = unsafe { d.get_buffer_memory_requirements(raw) };
-        let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
-            name,
-            requirements: req,
-            location,
-            linear: true,
-            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-        });
-        let allocation = match allocation {
-            Ok(a) => a,
-            Err(source) => {
-                unsafe { d.destroy_buffer(raw, None) };
-                return Err(GpuError::Alloc { name: name.to_string(), bytes: req.size, source });
-            }
-        };
+        let allocation =
+            allocate(ctx, name, req, location, true).inspect_err(|_| unsafe { d.destroy_buffer(raw, None) })?;
         if let Err(e) = unsafe { d.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) } {
             unsafe { d.destroy_buffer(raw, None) };
             let _ = ctx.allocator().free(allocation);
@@ -216,67 +204,93 @@ pub struct Image {
     pub desc: ImageDesc,
     pub name: String,
     pub bytes: u64,
+    /// Whether dropping it destroys the `VkImage` (not a swapchain's image, see [`Image::external`]).
+    owned: bool,
+}
+
+/// Refuse, naming the limit, an image larger than the device's maxImageDimension2D/3D or with
+/// more layers than maxImageArrayLayers.
+fn check_image_limits(ctx: &Context, name: &str, desc: &ImageDesc) -> GpuResult<()> {
+    let lim = &ctx.info.limits;
+    let (max, what) = match desc.kind {
+        ImageKind::D3 => (lim.max_image_dimension3_d, "maxImageDimension3D"),
+        _ => (lim.max_image_dimension2_d, "maxImageDimension2D"),
+    };
+    if desc.extent.width.max(desc.extent.height).max(desc.extent.depth) > max {
+        return Err(GpuError::Limit(format!(
+            "image {name:?} is {}x{}x{}, beyond this device's {what} = {max}",
+            desc.extent.width, desc.extent.height, desc.extent.depth
+        )));
+    }
+    if desc.kind == ImageKind::D2Array && desc.layers > lim.max_image_array_layers {
+        return Err(GpuError::Limit(format!(
+            "image {name:?} needs {} layers, beyond this device's maxImageArrayLayers = {}",
+            desc.layers, lim.max_image_array_layers
+        )));
+    }
+    Ok(())
+}
+
+/// The image object of `desc` (optimal tiling, one sample, exclusive, UNDEFINED), no memory yet.
+fn create_image(ctx: &Context, desc: &ImageDesc) -> GpuResult<vk::Image> {
+    let image_type = match desc.kind {
+        ImageKind::D3 => vk::ImageType::TYPE_3D,
+        _ => vk::ImageType::TYPE_2D,
+    };
+    let info = vk::ImageCreateInfo::default()
+        .image_type(image_type)
+        .format(desc.format)
+        .extent(desc.extent)
+        .mip_levels(desc.mip_levels)
+        .array_layers(desc.layers)
+        .samples(vk::SampleCountFlags::TYPE_1)
+        .tiling(vk::ImageTiling::OPTIMAL)
+        .usage(desc.usage)
+        .sharing_mode(vk::SharingMode::EXCLUSIVE)
+        .initial_layout(vk::ImageLayout::UNDEFINED);
+    unsafe { ctx.device.create_image(&info, None) }.vk("vkCreateImage")
+}
+
+/// Device-local memory for image `raw` (checked against the device's limits first); on failure
+/// the image is destroyed.
+fn allocate_image_memory(
+    ctx: &Context,
+    name: &str,
+    raw: vk::Image,
+    req: vk::MemoryRequirements,
+) -> GpuResult<Allocation> {
+    check_allocation(ctx, name, req.size)
+        .and_then(|()| allocate(ctx, name, req, MemoryLocation::GpuOnly, false))
+        .inspect_err(|_| unsafe { ctx.device.destroy_image(raw, None) })
+}
+
+/// Memory from gpu-allocator for an object with requirements `req` (`linear`: a buffer or
+/// linearly tiled image); the error names the object and the bytes asked for.
+fn allocate(
+    ctx: &Context,
+    name: &str,
+    req: vk::MemoryRequirements,
+    location: MemoryLocation,
+    linear: bool,
+) -> GpuResult<Allocation> {
+    ctx.allocator()
+        .allocate(&AllocationCreateDesc {
+            name,
+            requirements: req,
+            location,
+            linear,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        })
+        .map_err(|source| GpuError::Alloc { name: name.to_string(), bytes: req.size, source })
 }
 
 impl Image {
     pub fn new(ctx: &Arc<Context>, name: &str, desc: ImageDesc) -> GpuResult<Image> {
         let d = &ctx.device;
-        let lim = &ctx.info.limits;
-        let (max, what) = match desc.kind {
-            ImageKind::D3 => (lim.max_image_dimension3_d, "maxImageDimension3D"),
-            _ => (lim.max_image_dimension2_d, "maxImageDimension2D"),
-        };
-        if desc.extent.width.max(desc.extent.height).max(desc.extent.depth) > max {
-            return Err(GpuError::Limit(format!(
-                "image {name:?} is {}x{}x{}, beyond this device's {what} = {max}",
-                desc.extent.width, desc.extent.height, desc.extent.depth
-            )));
-        }
-        if desc.kind == ImageKind::D2Array && desc.layers > lim.max_image_array_layers {
-            return Err(GpuError::Limit(format!(
-                "image {name:?} needs {} layers, beyond this device's maxImageArrayLayers = {}",
-                desc.layers, lim.max_image_array_layers
-            )));
-        }
-        let image_type = match desc.kind {
-            ImageKind::D3 => vk::ImageType::TYPE_3D,
-            _ => vk::ImageType::TYPE_2D,
-        };
-        let raw = unsafe {
-            d.create_image(
-                &vk::ImageCreateInfo::default()
-                    .image_type(image_type)
-                    .format(desc.format)
-                    .extent(desc.extent)
-                    .mip_levels(desc.mip_levels)
-                    .array_layers(desc.layers)
-                    .samples(vk::SampleCountFlags::TYPE_1)
-                    .tiling(vk::ImageTiling::OPTIMAL)
-                    .usage(desc.usage)
-                    .sharing_mode(vk::SharingMode::EXCLUSIVE)
-                    .initial_layout(vk::ImageLayout::UNDEFINED),
-                None,
-            )
-        }
-        .vk("vkCreateImage")?;
+        check_image_limits(ctx, name, &desc)?;
+        let raw = create_image(ctx, &desc)?;
         let req = unsafe { d.get_image_memory_requirements(raw) };
-        if let Err(e) = check_allocation(ctx, name, req.size) {
-            unsafe { d.destroy_image(raw, None) };
-            return Err(e);
-        }
-        let allocation = match ctx.allocator().allocate(&AllocationCreateDesc {
-            name,
-            requirements: req,
-            location: MemoryLocation::GpuOnly,
-            linear: false,
-            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-        }) {
-            Ok(a) => a,
-            Err(source) => {
-                unsafe { d.destroy_image(raw, None) };
-                return Err(GpuError::Alloc { name: name.to_string(), bytes: req.size, source });
-            }
-        };
+        let allocation = allocate_image_memory(ctx, name, raw, req)?;
         let mut img = Image {
             ctx: ctx.clone(),
             raw,
@@ -287,39 +301,80 @@ impl Image {
             desc,
             name: name.to_string(),
             bytes: req.size,
+            owned: true,
         };
         unsafe { d.bind_image_memory(raw, allocation.memory(), allocation.offset()) }.vk("vkBindImageMemory")?;
         img.allocation = Some(allocation);
         ctx.name_object(raw, name);
-        let view_type = match desc.kind {
+        img.create_whole_view()?;
+        img.create_layer_views()?;
+        img.create_level_views()?;
+        Ok(img)
+    }
+
+    /// An image someone else owns (a swapchain's), with a view of its own: tracked by the
+    /// frame's barriers like any other; dropping it destroys only the view.
+    pub fn external(ctx: &Arc<Context>, name: &str, raw: vk::Image, desc: ImageDesc) -> GpuResult<Image> {
+        let mut img = Image {
+            ctx: ctx.clone(),
+            raw,
+            view: vk::ImageView::null(),
+            layer_views: Vec::new(),
+            level_views: Vec::new(),
+            allocation: None,
+            desc,
+            name: name.to_string(),
+            bytes: 0,
+            owned: false,
+        };
+        ctx.name_object(raw, name);
+        img.create_whole_view()?;
+        Ok(img)
+    }
+
+    /// The view of the whole image (all mips, all layers), named "`name` view".
+    fn create_whole_view(&mut self) -> GpuResult<()> {
+        let view_type = match self.desc.kind {
             ImageKind::D2 => vk::ImageViewType::TYPE_2D,
             ImageKind::D2Array => vk::ImageViewType::TYPE_2D_ARRAY,
             ImageKind::D3 => vk::ImageViewType::TYPE_3D,
         };
-        img.view = img.create_view(view_type, desc.full_range())?;
-        ctx.name_object(img.view, &format!("{name} view"));
-        if desc.kind == ImageKind::D2Array {
-            for layer in 0..desc.layers {
-                let range = vk::ImageSubresourceRange {
-                    base_array_layer: layer,
-                    layer_count: 1,
-                    level_count: 1,
-                    ..desc.full_range()
-                };
-                let v = img.create_view(vk::ImageViewType::TYPE_2D, range)?;
-                ctx.name_object(v, &format!("{name} layer {layer}"));
-                img.layer_views.push(v);
-            }
+        self.view = self.create_view(view_type, self.desc.full_range())?;
+        self.ctx.name_object(self.view, &format!("{} view", self.name));
+        Ok(())
+    }
+
+    /// One 2D view per array layer of a D2Array image (none for the other kinds).
+    fn create_layer_views(&mut self) -> GpuResult<()> {
+        if self.desc.kind != ImageKind::D2Array {
+            return Ok(());
         }
-        if desc.kind == ImageKind::D3 && desc.mip_levels > 1 {
-            for level in 0..desc.mip_levels {
-                let range = vk::ImageSubresourceRange { base_mip_level: level, level_count: 1, ..desc.full_range() };
-                let v = img.create_view(vk::ImageViewType::TYPE_3D, range)?;
-                ctx.name_object(v, &format!("{name} level {level}"));
-                img.level_views.push(v);
-            }
+        for layer in 0..self.desc.layers {
+            let range = vk::ImageSubresourceRange {
+                base_array_layer: layer,
+                layer_count: 1,
+                level_count: 1,
+                ..self.desc.full_range()
+            };
+            let v = self.create_view(vk::ImageViewType::TYPE_2D, range)?;
+            self.ctx.name_object(v, &format!("{} layer {layer}", self.name));
+            self.layer_views.push(v);
         }
-        Ok(img)
+        Ok(())
+    }
+
+    /// One 3D view per mip level of a D3 image with more than one level (none otherwise).
+    fn create_level_views(&mut self) -> GpuResult<()> {
+        if self.desc.kind != ImageKind::D3 || self.desc.mip_levels <= 1 {
+            return Ok(());
+        }
+        for level in 0..self.desc.mip_levels {
+            let range = vk::ImageSubresourceRange { base_mip_level: level, level_count: 1, ..self.desc.full_range() };
+            let v = self.create_view(vk::ImageViewType::TYPE_3D, range)?;
+            self.ctx.name_object(v, &format!("{} level {level}", self.name));
+            self.level_views.push(v);
+        }
+        Ok(())
     }
 
     /// Edge length of mip `level` (3D images).
@@ -375,7 +430,9 @@ impl Drop for Image {
             if self.view != vk::ImageView::null() {
                 self.ctx.device.destroy_image_view(self.view, None);
             }
-            self.ctx.device.destroy_image(self.raw, None);
+            if self.owned {
+                self.ctx.device.destroy_image(self.raw, None);
+            }
         }
         if let Some(a) = self.allocation.take() {
             let _ = self.ctx.allocator().free(a);

@@ -37,6 +37,11 @@ pub enum Access {
     AccelerationStructureBuildInput,
     /// An acceleration structure (its backing buffer) traced by ray queries in compute shaders.
     ComputeShaderReadAccelerationStructure,
+    /// A swapchain image handed to the presentation engine. The presentation engine's reads
+    /// are ordered by the semaphore the frame's last submit signals; the stage is every stage,
+    /// so that the next frame's first barrier on the image chains with the semaphore that
+    /// waits for its acquisition, whatever stage that wait names.
+    Present,
     // ----- writes -----
     ColorAttachmentWrite,
     DepthAttachmentWrite,
@@ -102,6 +107,7 @@ impl Access {
             Access::ComputeShaderReadAccelerationStructure => {
                 (S::COMPUTE_SHADER, A::ACCELERATION_STRUCTURE_READ_KHR, L::UNDEFINED, false)
             }
+            Access::Present => (S::ALL_COMMANDS, A::NONE, L::PRESENT_SRC_KHR, false),
             Access::ColorAttachmentWrite => (
                 S::COLOR_ATTACHMENT_OUTPUT,
                 A::COLOR_ATTACHMENT_WRITE | A::COLOR_ATTACHMENT_READ,
@@ -436,6 +442,24 @@ mod tests {
     }
 
     #[test]
+    fn a_presented_image_is_transitioned_after_its_writes_and_reacquired_without_its_contents() {
+        use Access::*;
+        // The UI drawn, then handed to the presentation engine: writes made available, layout
+        // changed to PRESENT_SRC, nothing after it in the frame waits.
+        let b = barrier(&[ColorAttachmentWrite], &[Present], true, false).expect("a layout change");
+        assert_eq!(b.src_stage, S::COLOR_ATTACHMENT_OUTPUT);
+        assert_eq!(b.src_access, A::COLOR_ATTACHMENT_WRITE | A::COLOR_ATTACHMENT_READ);
+        assert_eq!((b.old_layout, b.new_layout), (L::COLOR_ATTACHMENT_OPTIMAL, L::PRESENT_SRC_KHR));
+        assert_eq!(b.dst_access, A::NONE);
+        // Acquired again next frame and drawn over whole: old contents dropped, and the barrier
+        // waits on every stage so it chains with the acquire semaphore's wait.
+        let b = barrier(&[Present], &[ColorAttachmentWrite], true, true).expect("a layout change");
+        assert_eq!(b.src_stage, S::ALL_COMMANDS);
+        assert_eq!(b.src_access, A::NONE);
+        assert_eq!((b.old_layout, b.new_layout), (L::UNDEFINED, L::COLOR_ATTACHMENT_OPTIMAL));
+    }
+
+    #[test]
     fn every_access_has_consistent_info() {
         use Access::*;
         for a in [
@@ -454,6 +478,7 @@ mod tests {
             IndirectCommandRead,
             AccelerationStructureBuildInput,
             ComputeShaderReadAccelerationStructure,
+            Present,
             ColorAttachmentWrite,
             DepthAttachmentWrite,
             ComputeShaderWrite,

@@ -63,6 +63,19 @@ pub trait Pass {
         QueueKind::Graphics
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer);
+    /// Binary semaphores the submit holding this pass must wait for or signal (a viewer's
+    /// swapchain image: acquired before it is drawn, handed to the presentation engine after).
+    fn semaphores(&self) -> BinarySemaphores {
+        BinarySemaphores::default()
+    }
+}
+
+/// What [`Pass::semaphores`] asks of its submit: wait for `wait` before the stages it names,
+/// signal `signal` when the submit's work is done.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct BinarySemaphores {
+    pub wait: Option<(vk::Semaphore, vk::PipelineStageFlags2)>,
+    pub signal: Option<vk::Semaphore>,
 }
 
 /// The queue a pass's work belongs to. In `sync` mode every pass runs on the graphics queue;
@@ -216,83 +229,190 @@ impl StateTracker {
     /// the owning family changes) is a semaphore wait for the other queue's batch, plus an
     /// ownership transfer (release there, acquire here) when the families differ.
     pub fn plan_one(&self, t: &mut Transition, key: ResKey, name: &str, next: &[Access], discard: bool, q: QueueKind) {
-        let st = self.state.get(&key).cloned().unwrap_or_default();
+        let p = PlannedUse::new(self, key, name, next, discard, q);
+        let same = p.same_queue_barrier();
+        if p.cross {
+            p.plan_cross_queue(t, same.is_some());
+        } else if let Some(b) = same {
+            t.log.push(format!("{name}: {:?} -> {next:?} ({:?} -> {:?})", p.prev_q, b.old_layout, b.new_layout));
+            t.barriers.push((key, b));
+        }
+        t.updates.push((key, p.into_new_state()));
+    }
+
+    /// Take a resource as last accessed by `access` on `queue` in a batch already complete
+    /// (a swapchain image, which starts in the presentation engine's hands).
+    pub fn adopt(&mut self, key: ResKey, access: Access, queue: QueueKind) {
+        let mut st = ResState { layout: access.info().layout, owner: Some(queue), ..ResState::default() };
+        st.write[queue.index()] = vec![access];
+        self.state.insert(key, st);
+    }
+
+    /// Record the planned states, with `value` the timeline value of the pass's batch.
+    pub fn commit(&mut self, t: &mut Transition, queue: QueueKind, value: u64) {
+        for (key, mut st) in t.updates.drain(..) {
+            st.val[queue.index()] = value;
+            self.state.insert(key, st);
+        }
+    }
+}
+
+/// One resource's uses by one pass on queue `q`, against the resource's tracked state: the
+/// hazards [`StateTracker::plan_one`] decides on.
+struct PlannedUse<'a> {
+    key: ResKey,
+    name: &'a str,
+    next: &'a [Access],
+    discard: bool,
+    q: QueueKind,
+    /// Queue family per [`QueueKind`] when the two differ.
+    families: Option<[u32; 2]>,
+    /// The resource's state before the pass.
+    st: ResState,
+    /// The layout the pass needs (`UNDEFINED` for buffers).
+    next_layout: vk::ImageLayout,
+    /// The pass changes the image's layout (a discard always does): that is a write.
+    layout_change: bool,
+    /// The pass writes the resource.
+    next_writes: bool,
+    /// The other queue's family owns the image and its contents are kept: ownership moves here.
+    transfer: bool,
+    /// A hazard with the other queue's accesses: a semaphore wait for its batch.
+    cross: bool,
+    /// Every access on this queue a barrier here must wait for.
+    prev_q: Vec<Access>,
+}
+
+impl<'a> PlannedUse<'a> {
+    /// Compare the pass's accesses `next` (on `q`) with what `tracker` knows of the resource.
+    fn new(
+        tracker: &StateTracker,
+        key: ResKey,
+        name: &'a str,
+        next: &'a [Access],
+        discard: bool,
+        q: QueueKind,
+    ) -> PlannedUse<'a> {
+        let st = tracker.state.get(&key).cloned().unwrap_or_default();
         let o = q.other();
-        let (qi, oi) = (q.index(), o.index());
         let next_layout = if key.is_image { layout_of(next) } else { vk::ImageLayout::UNDEFINED };
         let layout_change =
             key.is_image && next_layout != vk::ImageLayout::UNDEFINED && (discard || next_layout != st.layout);
         let next_writes = writes(next);
-        let transfer = key.is_image && self.families.is_some() && st.owner == Some(o) && !discard;
+        let transfer = key.is_image && tracker.families.is_some() && st.owner == Some(o) && !discard;
         let cross = st.touched(o) && (st.writer == Some(o) || next_writes || layout_change || transfer);
         let prev_q = st.all(q);
-        let same = if next_writes || layout_change {
-            barrier_from(&prev_q, st.layout, next, key.is_image, discard)
-        } else if !st.write[qi].is_empty() && next.iter().any(|a| !st.reads[qi].contains(a)) {
-            barrier_from(&st.write[qi], st.layout, next, key.is_image, false)
+        PlannedUse {
+            key,
+            name,
+            next,
+            discard,
+            q,
+            families: tracker.families,
+            st,
+            next_layout,
+            layout_change,
+            next_writes,
+            transfer,
+            cross,
+            prev_q,
+        }
+    }
+
+    /// The barrier after this queue's own earlier accesses: after all of them for a write or a
+    /// layout change; after the last write for a read in a stage not yet given it; else none.
+    fn same_queue_barrier(&self) -> Option<Barrier> {
+        let (st, qi) = (&self.st, self.q.index());
+        if self.next_writes || self.layout_change {
+            barrier_from(&self.prev_q, st.layout, self.next, self.key.is_image, self.discard)
+        } else if !st.write[qi].is_empty() && self.next.iter().any(|a| !st.reads[qi].contains(a)) {
+            barrier_from(&st.write[qi], st.layout, self.next, self.key.is_image, false)
         } else {
             None
+        }
+    }
+
+    /// A hazard with the other queue: wait for its batch, then a barrier here (the acquire half
+    /// of an ownership transfer, whose release half the other queue records) when the pass
+    /// transfers, changes the layout or needs a same-queue barrier (`same`).
+    fn plan_cross_queue(&self, t: &mut Transition, same: bool) {
+        let (name, next, q, o) = (self.name, self.next, self.q, self.q.other());
+        let mut b = self.after_wait_barrier();
+        let (old_layout, new_layout) = (b.old_layout, b.new_layout);
+        if self.transfer {
+            self.plan_release(t, &mut b);
+        }
+        let waited = self.st.val[o.index()];
+        t.wait = t.wait.max(Some(waited));
+        t.log.push(format!("{name}: wait for {} {waited} ({:?} then {next:?})", o.name(), self.st.all(o)));
+        if self.transfer {
+            let (from, to) = (o.name(), q.name());
+            t.log.push(format!("{name}: acquire {from} -> {to} ({old_layout:?} -> {new_layout:?}) for {next:?}"));
+        } else if self.layout_change || same {
+            let prev_q = &self.prev_q;
+            t.log.push(format!("{name}: {prev_q:?} -> {next:?} ({old_layout:?} -> {new_layout:?})"));
+        }
+        if self.transfer || self.layout_change || same {
+            t.barriers.push((self.key, b));
+        }
+    }
+
+    /// The barrier after the semaphore wait: it chains to the wait (ALL_COMMANDS) and also
+    /// covers this queue's own earlier accesses; the layout is kept unless the pass needs another.
+    fn after_wait_barrier(&self) -> Barrier {
+        let st = &self.st;
+        let new_layout = if self.next_layout == vk::ImageLayout::UNDEFINED { st.layout } else { self.next_layout };
+        let old_layout = if self.discard { vk::ImageLayout::UNDEFINED } else { st.layout };
+        Barrier {
+            src_stage: vk::PipelineStageFlags2::ALL_COMMANDS,
+            src_access: write_mask(&self.prev_q),
+            dst_stage: stage_mask(self.next),
+            dst_access: access_mask(self.next),
+            old_layout,
+            new_layout,
+            src_family: vk::QUEUE_FAMILY_IGNORED,
+            dst_family: vk::QUEUE_FAMILY_IGNORED,
+        }
+    }
+
+    /// Make `acquire` the acquire half of an ownership transfer from the other queue's family
+    /// and plan the matching release half, which waits for every access there.
+    fn plan_release(&self, t: &mut Transition, acquire: &mut Barrier) {
+        let (q, o) = (self.q, self.q.other());
+        let fam = self.families.expect("families differ");
+        acquire.src_family = fam[o.index()];
+        acquire.dst_family = fam[q.index()];
+        let prev_o = self.st.all(o);
+        let release = Barrier {
+            src_stage: stage_mask(&prev_o),
+            src_access: write_mask(&prev_o),
+            dst_stage: vk::PipelineStageFlags2::NONE,
+            dst_access: vk::AccessFlags2::NONE,
+            ..*acquire
         };
-        if cross {
-            let new_layout = if next_layout == vk::ImageLayout::UNDEFINED { st.layout } else { next_layout };
-            let old_layout = if discard { vk::ImageLayout::UNDEFINED } else { st.layout };
-            // The acquire (or plain) barrier chains to the semaphore wait (ALL_COMMANDS) and
-            // also covers this queue's own earlier accesses.
-            let mut b = Barrier {
-                src_stage: vk::PipelineStageFlags2::ALL_COMMANDS,
-                src_access: write_mask(&prev_q),
-                dst_stage: stage_mask(next),
-                dst_access: access_mask(next),
-                old_layout,
-                new_layout,
-                src_family: vk::QUEUE_FAMILY_IGNORED,
-                dst_family: vk::QUEUE_FAMILY_IGNORED,
-            };
-            if transfer {
-                let fam = self.families.expect("families differ");
-                b.src_family = fam[oi];
-                b.dst_family = fam[qi];
-                let prev_o = st.all(o);
-                let release = Barrier {
-                    src_stage: stage_mask(&prev_o),
-                    src_access: write_mask(&prev_o),
-                    dst_stage: vk::PipelineStageFlags2::NONE,
-                    dst_access: vk::AccessFlags2::NONE,
-                    ..b
-                };
-                b.src_access = vk::AccessFlags2::NONE;
-                t.releases.push((key, release));
-                t.log.push(format!("{name}: release {} -> {} ({old_layout:?} -> {new_layout:?})", o.name(), q.name()));
-            }
-            t.wait = t.wait.max(Some(st.val[oi]));
-            t.log.push(format!("{name}: wait for {} {} ({:?} then {next:?})", o.name(), st.val[oi], st.all(o)));
-            if transfer {
-                let (from, to) = (o.name(), q.name());
-                t.log.push(format!("{name}: acquire {from} -> {to} ({old_layout:?} -> {new_layout:?}) for {next:?}"));
-            } else if layout_change || same.is_some() {
-                t.log.push(format!("{name}: {prev_q:?} -> {next:?} ({old_layout:?} -> {new_layout:?})"));
-            }
-            if transfer || layout_change || same.is_some() {
-                t.barriers.push((key, b));
-            }
-        } else if let Some(b) = same {
-            t.log.push(format!("{name}: {prev_q:?} -> {next:?} ({:?} -> {:?})", b.old_layout, b.new_layout));
-            t.barriers.push((key, b));
+        acquire.src_access = vk::AccessFlags2::NONE;
+        t.releases.push((self.key, release));
+        let (old_layout, new_layout) = (release.old_layout, release.new_layout);
+        t.log.push(format!("{}: release {} -> {} ({old_layout:?} -> {new_layout:?})", self.name, o.name(), q.name()));
+    }
+
+    /// The resource's state after the pass (the timeline value is set by [`StateTracker::commit`]).
+    fn into_new_state(self) -> ResState {
+        let (q, qi, next) = (self.q, self.q.index(), self.next);
+        let mut new = self.st;
+        if self.key.is_image && self.next_layout != vk::ImageLayout::UNDEFINED {
+            new.layout = self.next_layout;
         }
-        let mut new = st.clone();
-        if key.is_image && next_layout != vk::ImageLayout::UNDEFINED {
-            new.layout = next_layout;
-        }
-        if key.is_image && (new.owner.is_none() || transfer || discard) {
+        if self.key.is_image && (new.owner.is_none() || self.transfer || self.discard) {
             new.owner = Some(q);
         }
-        if next_writes || layout_change || transfer {
+        if self.next_writes || self.layout_change || self.transfer {
             // A write (or a layout transition): everything before it is ordered before it.
             new.writer = Some(q);
             new.write = [vec![], vec![]];
             new.reads = [vec![], vec![]];
             new.write[qi] = next.to_vec();
-            if !next_writes {
+            if !self.next_writes {
                 new.reads[qi] = next.to_vec();
             }
         } else {
@@ -302,15 +422,7 @@ impl StateTracker {
                 }
             }
         }
-        t.updates.push((key, new));
-    }
-
-    /// Record the planned states, with `value` the timeline value of the pass's batch.
-    pub fn commit(&mut self, t: &mut Transition, queue: QueueKind, value: u64) {
-        for (key, mut st) in t.updates.drain(..) {
-            st.val[queue.index()] = value;
-            self.state.insert(key, st);
-        }
+        new
     }
 }
 

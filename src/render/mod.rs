@@ -216,6 +216,18 @@ impl Renderer {
         })
     }
 
+    /// Track a swapchain `image` as in the presentation engine's hands: the first frame that
+    /// draws into it then orders its barrier after the acquisition's semaphore wait.
+    pub fn adopt_presented(&mut self, image: &crate::gpu::Image) {
+        self.scheduler.adopt_presented(image);
+    }
+
+    /// The frame's display image (tone-mapped, sRGB-encoded RGBA8 in a UNORM format) that a
+    /// viewer presents.
+    pub fn display_image(&self) -> &Arc<crate::gpu::Image> {
+        &self.passes.tonemap.display
+    }
+
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
     }
@@ -465,6 +477,12 @@ impl Renderer {
     /// Record and submit one frame at scene time `t`. The host waits only to reuse a frame
     /// slot still in flight, or, with `readback`, for this frame (then [`Renderer::output`]).
     pub fn render(&mut self, t: f32, readback: bool) -> GpuResult<FrameStats> {
+        self.render_with(t, readback, &[])
+    }
+
+    /// [`Renderer::render`] with `extra` passes recorded after the frame's own (a viewer's
+    /// presentation and UI): their barriers come from their declared uses like any pass's.
+    pub fn render_with(&mut self, t: f32, readback: bool, extra: &[&dyn Pass]) -> GpuResult<FrameStats> {
         let start = Instant::now();
         let ctx = self.ctx.clone();
         if readback {
@@ -482,7 +500,8 @@ impl Renderer {
         if state.relight {
             self.voxel_updates += 1;
         }
-        let list = self.passes.list(state);
+        let mut list = self.passes.list(state);
+        list.extend_from_slice(extra);
         self.last_passes = list.iter().map(|p| p.name().to_string()).collect();
         self.scheduler.record(&list)?;
         self.scheduler.end(readback)?;

@@ -142,6 +142,9 @@ struct Batch {
     value: u64,
     wait: Option<u64>,
     passes: Vec<String>,
+    /// Binary semaphores its passes wait for (with the stages that wait) and signal.
+    binary_waits: Vec<(vk::Semaphore, vk::PipelineStageFlags2)>,
+    binary_signals: Vec<vk::Semaphore>,
 }
 
 /// One queue's side of the scheduler.
@@ -305,6 +308,12 @@ impl Scheduler {
         self.mode = mode;
     }
 
+    /// Track `image` as presented (see [`StateTracker::adopt`]).
+    pub fn adopt_presented(&mut self, image: &crate::gpu::Image) {
+        let key = super::graph::Res::Image(image).res_key();
+        self.tracker.adopt(key, crate::gpu::Access::Present, QueueKind::Graphics);
+    }
+
     /// Submits of the last frame, in submission order.
     pub fn submits(&self) -> &[SubmitRecord] {
         &self.submits
@@ -423,6 +432,9 @@ impl Scheduler {
         self.ctx.end_label(cmd);
         if let Some(b) = &mut self.streams[qi].open {
             b.passes.push(pass.name().to_string());
+            let sems = pass.semaphores();
+            b.binary_waits.extend(sems.wait);
+            b.binary_signals.extend(sems.signal);
         }
         Ok(())
     }
@@ -434,7 +446,14 @@ impl Scheduler {
             let cmd = self.command_buffer(q)?;
             let s = &mut self.streams[qi];
             s.value += 1;
-            s.open = Some(Batch { cmd, value: s.value, wait: None, passes: Vec::new() });
+            s.open = Some(Batch {
+                cmd,
+                value: s.value,
+                wait: None,
+                passes: Vec::new(),
+                binary_waits: Vec::new(),
+                binary_signals: Vec::new(),
+            });
         }
         let s = &mut self.streams[qi];
         let b = s.open.as_mut().expect("open batch");
@@ -504,7 +523,7 @@ impl Scheduler {
         let d = &self.ctx.device;
         unsafe { d.end_command_buffer(batch.cmd) }.vk("vkEndCommandBuffer")?;
         let other = &self.streams[q.other().index()];
-        let waits: Vec<vk::SemaphoreSubmitInfo> = batch
+        let mut waits: Vec<vk::SemaphoreSubmitInfo> = batch
             .wait
             .map(|w| {
                 debug_assert!(w <= other.submitted, "a wait names a value not yet submitted");
@@ -516,10 +535,17 @@ impl Scheduler {
             .into_iter()
             .collect();
         let s = &self.streams[qi];
-        let signals = [vk::SemaphoreSubmitInfo::default()
+        let mut signals = vec![vk::SemaphoreSubmitInfo::default()
             .semaphore(s.timeline)
             .value(batch.value)
             .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)];
+        for &(semaphore, stage) in &batch.binary_waits {
+            waits.push(vk::SemaphoreSubmitInfo::default().semaphore(semaphore).stage_mask(stage));
+        }
+        for &semaphore in &batch.binary_signals {
+            let all = vk::PipelineStageFlags2::ALL_COMMANDS;
+            signals.push(vk::SemaphoreSubmitInfo::default().semaphore(semaphore).stage_mask(all));
+        }
         let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(batch.cmd)];
         let submit = vk::SubmitInfo2::default()
             .wait_semaphore_infos(&waits)

@@ -45,6 +45,25 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Scene, SceneError> {
     file::build(path, parsed, opts)
 }
 
+/// The scene file at `path` with `opts.overrides` applied, as the text of a scene file that
+/// loads the same scene from any folder: its `[scene] search_paths` become the original file's
+/// folder, then `opts.asset_paths`, then the original search paths, all absolute (so relative
+/// asset paths resolve as they did). `dvsgi view` writes its captures' settings with it.
+pub fn standalone_file(path: &Path, opts: &LoadOptions) -> Result<String, SceneError> {
+    let text = text::read(path, &text::SCENE_FILE, |p, message| SceneError::Toml { path: p.to_path_buf(), message })?;
+    let mut file = file::parse(path, &text, &opts.overrides)?;
+    let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    let dir = absolute(path.parent().unwrap_or(Path::new(".")));
+    let mut search = vec![dir.clone()];
+    search.extend(opts.asset_paths.iter().map(|p| absolute(p)));
+    search.extend(file.scene.search_paths.iter().map(|s| dir.join(s)));
+    file.scene.search_paths = search.iter().map(|p| p.to_string_lossy().into_owned()).collect();
+    toml::to_string(&file).map_err(|e| SceneError::Toml {
+        path: path.to_path_buf(),
+        message: format!("internal error writing the scene with its settings: {e}"),
+    })
+}
+
 /// For `--set`: split "a.b.c=value" into ("a.b.c", "value"), error if no '='.
 pub fn parse_override(s: &str) -> Result<(String, String), SceneError> {
     let Some((k, v)) = s.split_once('=') else {

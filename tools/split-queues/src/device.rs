@@ -131,6 +131,7 @@ pub(crate) unsafe fn device_fns(device: vk::Device, gdpa: vk::PFN_vkGetDevicePro
         submit2: load(f(c"vkQueueSubmit2")).or_else(|| load(f(c"vkQueueSubmit2KHR"))),
         wait_idle: load(f(c"vkQueueWaitIdle"))?,
         bind_sparse: load(f(c"vkQueueBindSparse"))?,
+        present: load(f(c"vkQueuePresentKHR")),
         create_pool: load(f(c"vkCreateCommandPool"))?,
         destroy_pool: load(f(c"vkDestroyCommandPool"))?,
         allocate: load(f(c"vkAllocateCommandBuffers"))?,

@@ -21,8 +21,9 @@
 //!
 //! * One real queue runs everything in submission order, which hides a missing semaphore
 //!   wait. `DVSGI_SPLIT_QUEUES_ORDER=compute-first|graphics-first` holds one family's batches
-//!   back for as long as the application's semaphores allow (a host wait or query runs them),
-//!   so work that forgot to wait runs before what it reads, as it may on a GPU.
+//!   back for as long as the application's semaphores allow (a host wait, a query or a
+//!   presentation runs them), so work that forgot to wait runs before what it reads, as it
+//!   may on a GPU.
 //!
 //! With `DVSGI_SPLIT_QUEUES_TRACE=FILE`, every submit (its virtual family, the semaphore
 //! waits and signals it was handed, and its command buffers) is appended to FILE as one line:
@@ -104,6 +105,7 @@ unsafe fn device_function(name: &[u8]) -> vk::PFN_vkVoidFunction {
         c"vkQueueSubmit2KHR" => queue_submit2 as vk::PFN_vkQueueSubmit2,
         c"vkQueueWaitIdle" => queue_wait_idle as vk::PFN_vkQueueWaitIdle,
         c"vkQueueBindSparse" => queue_bind_sparse as vk::PFN_vkQueueBindSparse,
+        c"vkQueuePresentKHR" => queue_present as vk::PFN_vkQueuePresentKHR,
         c"vkCreateCommandPool" => create_command_pool as vk::PFN_vkCreateCommandPool,
         c"vkDestroyCommandPool" => destroy_command_pool as vk::PFN_vkDestroyCommandPool,
         c"vkAllocateCommandBuffers" => allocate_command_buffers as vk::PFN_vkAllocateCommandBuffers,

@@ -317,6 +317,18 @@ pub(crate) unsafe extern "system" fn queue_bind_sparse(
     (d.fns.bind_sparse)(d.real(q), n, info, fence)
 }
 
+/// A presentation waits for semaphores that held batches may signal: they run first.
+pub(crate) unsafe extern "system" fn queue_present(q: vk::Queue, info: *const vk::PresentInfoKHR) -> vk::Result {
+    let Some(d) = device_of(q) else {
+        return vk::Result::ERROR_DEVICE_LOST;
+    };
+    let Some(present) = d.fns.present else {
+        return vk::Result::ERROR_EXTENSION_NOT_PRESENT;
+    };
+    let _g = d.flushed();
+    present(d.real(q), info)
+}
+
 pub(crate) unsafe extern "system" fn queue_begin_label(q: vk::Queue, label: *const vk::DebugUtilsLabelEXT) {
     if let Some(d) = device_of(q) {
         if let Some(f) = d.fns.begin_label {

@@ -41,6 +41,8 @@ pub(crate) struct DeviceFns {
     pub(crate) submit2: Option<vk::PFN_vkQueueSubmit2>,
     pub(crate) wait_idle: vk::PFN_vkQueueWaitIdle,
     pub(crate) bind_sparse: vk::PFN_vkQueueBindSparse,
+    /// Where the device has VK_KHR_swapchain.
+    pub(crate) present: Option<vk::PFN_vkQueuePresentKHR>,
     pub(crate) create_pool: vk::PFN_vkCreateCommandPool,
     pub(crate) destroy_pool: vk::PFN_vkDestroyCommandPool,
     pub(crate) allocate: vk::PFN_vkAllocateCommandBuffers,
