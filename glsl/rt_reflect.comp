@@ -8,6 +8,10 @@
 // Each ray's hit leaves with its emission, the lights through shadow rays (brdf.glsl's BRDF,
 // as the path tracer), and the voxels' diffuse indirect light (the diffuse cones at the hit).
 // A ray that leaves the scene sees black, the renderer's background.
+// Temporal accumulation: each frame draws new directions (the seed takes the frame number,
+// frame.voxel.w) and averages them with the history of the frame.voxel.z frames before it that
+// saw the same view and scene (0: none, the history starts again); the renderer caps that count
+// at gi.specular_history - 1, past which the average is a moving one.
 #extension GL_EXT_ray_query : require
 #extension GL_EXT_control_flow_attributes : require
 #include "common.glsl"
@@ -47,6 +51,8 @@ layout(set = 0, binding = 19, std430) readonly buffer Materials { Material mater
 layout(set = 0, binding = 20) uniform texture2D textures[TEXTURE_COUNT];
 layout(set = 0, binding = 21) uniform sampler texture_sampler;
 layout(set = 0, binding = 22) uniform sampler3D vox_direct;  // the voxels' direct radiance
+// The reflections averaged over the frames the view and the scene stood still (unscaled).
+layout(set = 0, binding = 23, rgba32f) uniform image2D history;
 #include "cone.glsl"
 #include "ray_query.glsl"
 
@@ -146,8 +152,14 @@ void main() {
         vec3 N = safe_normalize(ns.xyz, vec3(0.0, 1.0, 0.0));
         vec3 ng = oct_decode(vec2(texelFetch(g_albedo, px, 0).a, ks_facing.a));
         vec3 V = safe_normalize(frame.camera_pos.xyz - P, N);
-        uint seed = (uint(lo.x) * 1973u) ^ (uint(lo.y) * 9277u) ^ 0x2545f491u;
+        uint seed = (uint(lo.x) * 1973u) ^ (uint(lo.y) * 9277u) ^ 0x2545f491u ^ (frame.voxel.w * 0x9e3779b9u);
         spec = reflected(P, N, ng, V, max(ns.a, 0.0), seed);
     }
+    uint past = frame.voxel.z;
+    if (past > 0u) {
+        vec3 h = imageLoad(history, lo).rgb;
+        spec = h + (spec - h) / float(past + 1u);
+    }
+    imageStore(history, lo, vec4(spec, 1.0));
     imageStore(out_specular, lo, vec4(min(spec * frame.radiance_scale.x, vec3(HALF_MAX)), 1.0));
 }

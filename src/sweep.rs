@@ -75,6 +75,8 @@ pub enum Param {
     SpecularRays,
     /// `gi.rt_hit_indirect`, by name (index in [`HIT_INDIRECT`]).
     RtHitIndirect,
+    /// `gi.specular_history`: frames the rays are averaged over while the view stands still.
+    SpecularHistory,
 }
 
 /// The `gi.mode` values a sweep can compare, in the order of their index as a knob value.
@@ -116,7 +118,7 @@ fn vct() -> String {
 }
 
 impl Param {
-    pub const ALL: [Param; 18] = [
+    pub const ALL: [Param; 19] = [
         Param::VoxelResolution,
         Param::DiffuseCones,
         Param::DiffuseConeAngle,
@@ -135,6 +137,7 @@ impl Param {
         Param::Specular,
         Param::SpecularRays,
         Param::RtHitIndirect,
+        Param::SpecularHistory,
     ];
     /// The key under `[gi]`.
     pub fn key(self) -> &'static str {
@@ -157,6 +160,7 @@ impl Param {
             Param::Specular => "specular",
             Param::SpecularRays => "specular_rays",
             Param::RtHitIndirect => "rt_hit_indirect",
+            Param::SpecularHistory => "specular_history",
         }
     }
     /// Short prefix in configuration labels.
@@ -180,6 +184,7 @@ impl Param {
             Param::Specular => "spec-",
             Param::SpecularRays => "sr",
             Param::RtHitIndirect => "hit-",
+            Param::SpecularHistory => "sh",
         }
     }
     /// The names a knob's values are written as, for knobs that take names.
@@ -386,6 +391,9 @@ pub struct Row {
     /// `gi.rt_hit_indirect` ("voxel" in rows from before it was recorded).
     #[serde(default = "voxel")]
     pub rt_hit_indirect: String,
+    /// `gi.specular_history` (1 in rows from before it was recorded: one frame's rays).
+    #[serde(default = "one")]
+    pub specular_history: u32,
     /// Median host wall clock of a frame that updates the voxels (relight, mips, bounces)
     /// and traces: the cost when lights or objects move. The front is drawn against this.
     pub frame_ms: f64,
@@ -430,6 +438,7 @@ impl Row {
             specular: s.specular.name().to_owned(),
             specular_rays: s.specular_rays,
             rt_hit_indirect: serde_name(s.rt_hit_indirect).unwrap_or_else(voxel),
+            specular_history: s.specular_history,
             frame_ms: time[0],
             frame_p95_ms: time[1],
             static_frame_ms: time[2],
@@ -517,6 +526,7 @@ impl Row {
             Param::Specular => specular_index(&self.specular),
             Param::SpecularRays => self.specular_rays as f64,
             Param::RtHitIndirect => name_index(&HIT_INDIRECT, &self.rt_hit_indirect),
+            Param::SpecularHistory => self.specular_history as f64,
         }
     }
 }

@@ -1,8 +1,9 @@
 //! Ray-traced reflections (`gi.specular = "rt"`) on the real device under validation: a
 //! mirror reflects a lit wall by the BRDF's specular reflectance, an alpha mask lets the
 //! reflection through where it cuts, empty space reflects black, a moving object is seen in the
-//! mirror in the frame it moves, and every schedule mode renders the same image. Devices without
-//! ray queries refuse `rt` with one line.
+//! mirror in the frame it moves, every schedule mode renders the same image, and glossy
+//! reflections average their rays over the frames the view stands still. Devices without ray
+//! queries refuse `rt` with one line.
 
 mod common;
 
@@ -273,5 +274,64 @@ fn an_empty_top_level_builds_without_error() {
     ctx.one_shot("build an empty top level", |cmd| top.record_build(&ctx, cmd)).expect("build");
     assert_eq!(top.count, 0);
     drop(top);
+    assert_no_validation_messages(&ctx);
+}
+
+/// The mirror scene with a glossy floor (exponent 40) and one ray per pixel: each frame's
+/// reflection is noisy where the lobe straddles the wall's edge.
+fn glossy_scene(history: u32, rays: u32) -> Scene {
+    let mut s = mirror_scene();
+    s.materials[0].shininess = 40.0;
+    s.settings.gi.specular_rays = rays;
+    s.settings.gi.specular_history = history;
+    s
+}
+
+/// Mean squared difference of two radiance images.
+fn mse(a: &[f32], b: &[f32]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| ((x - y) as f64).powi(2)).sum::<f64>() / a.len() as f64
+}
+
+/// `frames` frames of `s` (scene time fixed) and the radiance of the last.
+fn radiance_after(r: &mut Renderer, frames: u32) -> Vec<f32> {
+    for _ in 1..frames {
+        r.render(0.0, false).unwrap();
+    }
+    r.render(0.0, true).unwrap();
+    r.output().radiance
+}
+
+#[test]
+fn glossy_reflections_average_their_rays_while_the_view_stands_still_and_start_again_when_it_moves() {
+    let ctx = context();
+    if !has_ray_queries(&ctx) {
+        return;
+    }
+    let reference = |s: Scene| {
+        let mut r = Renderer::new(&ctx, s).unwrap();
+        radiance_after(&mut r, 2)
+    };
+    let truth = reference(glossy_scene(1, 64));
+    let mut r = Renderer::new(&ctx, glossy_scene(16, 1)).unwrap();
+    // Two frames (the voxels' light needs one to settle), then 16: the noise's variance an
+    // eighth (a quarter allows for the voxels' own run-to-run noise and the 64-ray truth's).
+    let two = mse(&radiance_after(&mut r, 2), &truth);
+    let sixteen = mse(&radiance_after(&mut r, 14), &truth);
+    assert!(sixteen < two / 4.0, "16 frames {sixteen:.3e} against two {two:.3e}");
+    // The camera moves: the history starts again, as noisy as one frame.
+    r.scene.camera.position.x += 0.05;
+    let moved_truth = {
+        let mut s = glossy_scene(1, 64);
+        s.camera.position.x += 0.05;
+        reference(s)
+    };
+    let moved = mse(&radiance_after(&mut r, 1), &moved_truth);
+    assert!(moved > sixteen * 4.0, "after the move {moved:.3e}, before {sixteen:.3e}");
+    // Without a history, frames stay as noisy as the first.
+    let mut single = Renderer::new(&ctx, glossy_scene(1, 1)).unwrap();
+    let still = mse(&radiance_after(&mut single, 16), &truth);
+    println!("MSE against 64 rays: two frames {two:.3e}, 16 frames {sixteen:.3e}, after a move {moved:.3e}, 16 frames without history {still:.3e}");
+    assert!(still > sixteen * 4.0, "16 frames without history {still:.3e}, with {sixteen:.3e}");
+    drop((r, single));
     assert_no_validation_messages(&ctx);
 }

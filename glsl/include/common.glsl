@@ -18,7 +18,8 @@ struct FrameData {
     uvec4 counts;      // x width, y height, z light count, w tone map (0 aces, 1 reinhard, 2 clamp)
     vec4 shadow;       // x PCF radius (texels), y normal bias (texels), z shadow map size, w exposure scale 2^EV
     vec4 radiance_scale;  // x: 16-bit radiance targets hold radiance * x (a power of two), y = 1/x
-    uvec4 voxel;       // x voxel updates before this frame's, y this update's bounce interleave (1: all voxels)
+    uvec4 voxel;       // x voxel updates before this frame's, y this update's bounce interleave (1: all voxels),
+                       // z frames in the rt reflections' history (0: none), w the frame's number
 };
 
 // Normalize, or `fallback` for a zero-length / non-finite vector.

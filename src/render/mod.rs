@@ -16,7 +16,7 @@ pub mod texture;
 pub mod voxel;
 
 use crate::gpu::{Access, Buffer, Context, GpuError, GpuResult};
-use crate::scene::{Scene, ToneMap};
+use crate::scene::{Motion, Scene, ToneMap};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use frame::{FramePasses, FrameState};
@@ -134,6 +134,17 @@ pub struct Renderer {
     uniforms: FrameUniforms,
     /// Voxel updates (relights) so far: the bounce's interleave phase.
     voxel_updates: u64,
+    /// What the ray-traced reflections' history was accumulated under.
+    history: ReflectionHistory,
+}
+
+/// The view and scene time the rt reflections' history holds, and how many frames it holds.
+#[derive(Default)]
+struct ReflectionHistory {
+    frames: u32,
+    view_proj: [[f32; 4]; 4],
+    time: f32,
+    started: bool,
 }
 
 impl Renderer {
@@ -213,6 +224,7 @@ impl Renderer {
             radiance_scale,
             uniforms: FrameUniforms::zeroed(),
             voxel_updates: 0,
+            history: ReflectionHistory::default(),
         })
     }
 
@@ -432,8 +444,8 @@ impl Renderer {
         self.scheduler.wait_idle()
     }
 
-    /// Write the per-frame data for scene time `t`.
-    fn update(&mut self, t: f32) {
+    /// Write the per-frame data for scene time `t`; whether the lights changed.
+    fn update(&mut self, t: f32) -> bool {
         let s = &self.scene.settings;
         let cam = &self.scene.camera;
         let view = cam.view();
@@ -463,7 +475,8 @@ impl Renderer {
         let (lights, views) = lights::build(&self.scene, t, bounds, s.shadow_map_size, s.shadow_filter_radius);
         let bytes: &[u8] = bytemuck::cast_slice(&lights);
         upload.set(1, bytes);
-        if bytes != self.last_lights.as_slice() {
+        let lights_moved = bytes != self.last_lights.as_slice();
+        if lights_moved {
             self.lights_changed = true;
             self.last_lights = bytes.to_vec();
         }
@@ -472,6 +485,20 @@ impl Renderer {
         if let Some(r) = self.passes.rays().filter(|r| r.build.is_some()) {
             upload.set(4, &r.scene.instance_bytes(&self.scene, &self.scene_gpu, t));
         }
+        lights_moved
+    }
+
+    /// The frames in the ray-traced reflections' history before this one: one more than last
+    /// frame's while the view, the lights and the moving objects stand still (up to
+    /// `gi.specular_history - 1`), else 0 (the history starts again).
+    fn reflection_history(&mut self, t: f32, lights_moved: bool) -> u32 {
+        let moving = t != self.history.time && self.scene.objects.iter().any(|o| o.motion != Motion::None);
+        let h = &mut self.history;
+        let still = h.started && h.view_proj == self.uniforms.view_proj && !lights_moved && !moving;
+        let cap = self.scene.settings.gi.specular_history.max(1);
+        h.frames = if still { (h.frames + 1).min(cap - 1) } else { 0 };
+        (h.view_proj, h.time, h.started) = (self.uniforms.view_proj, t, true);
+        h.frames
     }
 
     /// Record and submit one frame at scene time `t`. The host waits only to reuse a frame
@@ -490,12 +517,13 @@ impl Renderer {
         }
         let frame = self.frame_index;
         self.scheduler.begin(Some(frame))?;
-        self.update(t);
+        let lights_moved = self.update(t);
+        let history = self.reflection_history(t, lights_moved);
         let state = self.frame_state(readback);
         // The update counter and interleave of the bounce (uniforms written last: whether the
         // voxels relight depends on the lights just written).
         let interleave = if state.feed_back { self.scene.settings.gi.bounce_interleave } else { 1 };
-        self.uniforms.voxel = [self.voxel_updates as u32, interleave, 0, 0];
+        self.uniforms.voxel = [self.voxel_updates as u32, interleave, history, frame as u32];
         self.passes.upload.set(0, bytemuck::bytes_of(&self.uniforms));
         if state.relight {
             self.voxel_updates += 1;

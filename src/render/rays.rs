@@ -9,7 +9,7 @@ use super::voxel::VoxelVolumes;
 use super::FrameBuffers;
 use crate::gpu::accel::{self, AccelerationStructure, TopLevel, TriangleMesh, TriangleSource};
 use crate::gpu::{
-    shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuError, GpuResult, Image, Pipeline, Sampler,
+    shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuError, GpuResult, Image, ImageDesc, Pipeline, Sampler,
 };
 use crate::render::graph::{Pass, QueueKind, Use};
 use crate::scene::{HitIndirect, Scene};
@@ -166,6 +166,8 @@ pub struct RtReflectPass {
     rays: Arc<SceneRays>,
     scene: Arc<SceneGpu>,
     pub target: Arc<Image>,
+    /// The reflections averaged over the frames the view and the scene stood still.
+    history: Arc<Image>,
     pipeline: Pipeline,
     set: DescriptorSet,
     _sampler: Sampler,
@@ -187,11 +189,16 @@ impl RtReflectPass {
     ) -> GpuResult<RtReflectPass> {
         let sampler = GBuffer::sampler(ctx)?;
         let lod0 = volumes.final_radiance().clone();
+        let e = target.desc.extent;
+        let usage = vk::ImageUsageFlags::STORAGE;
+        let desc = ImageDesc::d2(vk::Format::R32G32B32A32_SFLOAT, e.width, e.height, usage);
+        let history = Arc::new(Image::new(ctx, "rt reflection history", desc)?);
+        let images = RtImages { target, history: &history, lod0: &lod0 };
         let set = DescriptorSet::new(
             ctx,
             "rt reflections",
             vk::ShaderStageFlags::COMPUTE,
-            &Self::binds(frame, gbuffer, volumes, scene, rays, target, &sampler, &lod0),
+            &Self::binds(frame, gbuffer, volumes, scene, rays, images, &sampler),
         )?;
         let cones = u32::from(hit == HitIndirect::Cones);
         let spec = [(0, scene.materials.texture_count()), (1, specular_rays), (2, cones)];
@@ -204,6 +211,7 @@ impl RtReflectPass {
             rays: rays.clone(),
             scene: scene.clone(),
             target: target.clone(),
+            history,
             pipeline,
             set,
             _sampler: sampler,
@@ -218,10 +226,10 @@ impl RtReflectPass {
         v: &'a VoxelVolumes,
         scene: &'a SceneGpu,
         rays: &'a SceneRays,
-        target: &'a Image,
+        images: RtImages<'a>,
         sampler: &'a Sampler,
-        lod0: &'a Image,
     ) -> Vec<Bind<'a>> {
+        let RtImages { target, history, lod0 } = images;
         let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let [pool_images, pool_sampler] = v.pool_binds();
         let [materials, textures] = scene.materials.binds();
@@ -249,8 +257,17 @@ impl RtReflectPass {
             textures,
             scene.materials.lod_sampler_bind(),
             Bind::Sampled(v.radiance.view, v.sampler.raw, ro),
+            Bind::StorageImage(history.view),
         ]
     }
+}
+
+/// The images the reflections write (the specular target and the history) and the radiance
+/// volume whose level 0 the hits read.
+struct RtImages<'a> {
+    target: &'a Image,
+    history: &'a Image,
+    lod0: &'a Image,
 }
 
 impl Pass for RtReflectPass {
@@ -267,6 +284,7 @@ impl Pass for RtReflectPass {
             uses.push(Use::image(&self.volumes.radiance, read));
         }
         uses.push(Use::overwrite(&self.target, Access::ComputeShaderWrite));
+        uses.push(Use::image(&self.history, Access::ComputeShaderWrite));
         uses.push(Use::buffer(&self.rays.top.structure.buffer, Access::ComputeShaderReadAccelerationStructure));
         uses.push(Use::buffer(&self.scene.instances, Access::ComputeShaderReadBuffer));
         uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));

@@ -387,6 +387,7 @@ pub(crate) const GI_KEYS: &[&str] = &[
     "diffuse_cone_angle",
     "specular",
     "specular_rays",
+    "specular_history",
     "rt_hit_indirect",
     "ao",
     "ao_falloff",

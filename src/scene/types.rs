@@ -544,6 +544,10 @@ pub struct GiSettings {
     pub specular: SpecularSource,
     /// `specular = "rt"`: rays per traced pixel on glossy surfaces (1..=64); mirrors take one.
     pub specular_rays: u32,
+    /// `specular = "rt"`: frames whose rays are averaged while the view and the scene stand
+    /// still (1..=256; 1 = each frame's rays alone). The average starts again when the camera,
+    /// a light or a moving object changes; past this many frames it becomes a moving average.
+    pub specular_history: u32,
     /// `specular = "rt"`: where a ray's hit gets its indirect light. The voxel's own bounced
     /// light by default: as accurate as cones from the hit on the Cornell boxes at a sixth of
     /// the cost on lavapipe, which buys 16 rays for less than 4 with cones (ACCURACY.md).
@@ -606,6 +610,7 @@ impl Default for GiSettings {
             diffuse_cone_angle: 0.0,
             specular: SpecularSource::Cone,
             specular_rays: 16,
+            specular_history: 16,
             rt_hit_indirect: HitIndirect::Voxel,
             ao: false,
             ao_falloff: 4.0,
@@ -658,6 +663,9 @@ impl GiSettings {
         }
         if !(1..=64).contains(&self.specular_rays) {
             return Err(("specular_rays", format!("{} is not in 1..=64", self.specular_rays)));
+        }
+        if !(1..=256).contains(&self.specular_history) {
+            return Err(("specular_history", format!("{} is not in 1..=256", self.specular_history)));
         }
         if self.diffuse_rays > 64 {
             return Err(("diffuse_rays", format!("{} is not in 0..=64", self.diffuse_rays)));

@@ -175,6 +175,10 @@ pub fn settings(ui: &mut egui::Ui, v: &SettingsView, actions: &mut Vec<Action>) 
     for knob in knobs(&technique) {
         knob_ui(ui, &knob, v, actions);
     }
+    if technique == "\"vct\"" && (v.value)("gi.specular").as_deref() == Some("\"rt\"") {
+        knob_ui(ui, &Knob::Choice("gi.specular_rays", "rays per pixel", &["1", "4", "16", "64"]), v, actions);
+        knob_ui(ui, &Knob::Choice("gi.specular_history", "frames averaged", &["1", "4", "16", "64"]), v, actions);
+    }
     ui.separator();
     let view = (v.value)("render.view").unwrap_or_default();
     choice(ui, "view", "render.view", &view, VIEWS, actions);
