@@ -291,18 +291,7 @@ impl Image {
         let raw = create_image(ctx, &desc)?;
         let req = unsafe { d.get_image_memory_requirements(raw) };
         let allocation = allocate_image_memory(ctx, name, raw, req)?;
-        let mut img = Image {
-            ctx: ctx.clone(),
-            raw,
-            view: vk::ImageView::null(),
-            layer_views: Vec::new(),
-            level_views: Vec::new(),
-            allocation: None,
-            desc,
-            name: name.to_string(),
-            bytes: req.size,
-            owned: true,
-        };
+        let mut img = Image::without_views(ctx, name, raw, desc, (req.size, true));
         unsafe { d.bind_image_memory(raw, allocation.memory(), allocation.offset()) }.vk("vkBindImageMemory")?;
         img.allocation = Some(allocation);
         ctx.name_object(raw, name);
@@ -312,10 +301,16 @@ impl Image {
         Ok(img)
     }
 
-    /// An image someone else owns (a swapchain's), with a view of its own: tracked by the
-    /// frame's barriers like any other; dropping it destroys only the view.
-    pub fn external(ctx: &Arc<Context>, name: &str, raw: vk::Image, desc: ImageDesc) -> GpuResult<Image> {
-        let mut img = Image {
+    /// `raw` as an image with no views or memory yet; `(bytes, owned)`: its memory's size and
+    /// whether dropping it destroys `raw`.
+    fn without_views(
+        ctx: &Arc<Context>,
+        name: &str,
+        raw: vk::Image,
+        desc: ImageDesc,
+        (bytes, owned): (u64, bool),
+    ) -> Image {
+        Image {
             ctx: ctx.clone(),
             raw,
             view: vk::ImageView::null(),
@@ -324,9 +319,15 @@ impl Image {
             allocation: None,
             desc,
             name: name.to_string(),
-            bytes: 0,
-            owned: false,
-        };
+            bytes,
+            owned,
+        }
+    }
+
+    /// An image someone else owns (a swapchain's), with a view of its own: tracked by the
+    /// frame's barriers like any other; dropping it destroys only the view.
+    pub fn external(ctx: &Arc<Context>, name: &str, raw: vk::Image, desc: ImageDesc) -> GpuResult<Image> {
+        let mut img = Image::without_views(ctx, name, raw, desc, (0, false));
         ctx.name_object(raw, name);
         img.create_whole_view()?;
         Ok(img)
