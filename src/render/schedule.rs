@@ -691,7 +691,8 @@ impl Scheduler {
 }
 
 /// The value of `timeline` that a submit waits for, as handed to `vkQueueSubmit2` (the
-/// scheduler waits on nothing else).
+/// scheduler waits on nothing else but the binary semaphores passes ask for, which carry no
+/// value).
 fn handed_wait(submit: &vk::SubmitInfo2, timeline: vk::Semaphore) -> Option<u64> {
     let n = submit.wait_semaphore_info_count as usize;
     if n == 0 || submit.p_wait_semaphore_infos.is_null() {
@@ -699,7 +700,10 @@ fn handed_wait(submit: &vk::SubmitInfo2, timeline: vk::Semaphore) -> Option<u64>
     }
     // SAFETY: the pointer and count come from the slice the submit info was built from.
     let waits = unsafe { std::slice::from_raw_parts(submit.p_wait_semaphore_infos, n) };
-    debug_assert!(waits.iter().all(|w| w.semaphore == timeline), "a wait on another semaphore");
+    debug_assert!(
+        waits.iter().all(|w| w.semaphore == timeline || w.value == 0),
+        "a timeline wait on another semaphore"
+    );
     waits.iter().filter(|w| w.semaphore == timeline).map(|w| w.value).max()
 }
 

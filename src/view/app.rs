@@ -198,7 +198,10 @@ impl Viewer {
 
     /// The UI, then the frame into the next swapchain image, its presentation and capture.
     fn frame(&mut self) -> crate::Result<()> {
-        let (output, actions) = self.run_ui();
+        let (mut output, actions) = self.run_ui();
+        if let Some(gpu) = self.gpu.as_mut() {
+            update_ui_textures(gpu, std::mem::take(&mut output.textures_delta))?;
+        }
         for a in actions {
             self.apply(a)?;
         }
@@ -208,7 +211,6 @@ impl Viewer {
             return Ok(());
         };
         egui.handle_platform_output(window, output.platform_output);
-        upload_ui_textures(gpu, &output.textures_delta)?;
         let primitives = egui.egui_ctx().tessellate(output.shapes, output.pixels_per_point);
         gpu.renderer.scene.camera = rig.camera();
         let swapchain = gpu.swapchain.as_mut().expect("ensure_swapchain made it");
@@ -243,7 +245,6 @@ impl Viewer {
             self.times.push(self.wall_ms.max(stats.host_ms), t.gpu_span_ms());
             self.last_timing = Some(t);
         }
-        free_ui_textures(gpu, &output.textures_delta)?;
         match stem {
             Some(stem) => self.write_capture(&stem, window_pixels.as_ref()),
             None => Ok(()),
@@ -439,7 +440,16 @@ fn idle(ctx: &Context) -> crate::Result<()> {
     Ok(())
 }
 
-/// The UI's new and changed textures, uploaded before the frame that draws them.
+/// The UI's new and changed textures uploaded before the frame that draws them, and those it
+/// no longer needs freed once no frame in flight uses them. `delta` is handled whatever fails
+/// (egui insists on it).
+fn update_ui_textures(gpu: &mut Gpu, mut delta: egui::TexturesDelta) -> crate::Result<()> {
+    let r = upload_ui_textures(gpu, &delta).and_then(|()| free_ui_textures(gpu, &delta));
+    delta.clear();
+    r
+}
+
+/// The UI's new and changed textures, uploaded.
 fn upload_ui_textures(gpu: &Gpu, delta: &egui::TexturesDelta) -> crate::Result<()> {
     for (id, deltas) in &delta.set {
         for d in deltas {
@@ -453,7 +463,8 @@ fn upload_ui_textures(gpu: &Gpu, delta: &egui::TexturesDelta) -> crate::Result<(
     Ok(())
 }
 
-/// The UI's textures it no longer needs, freed once no frame in flight uses them.
+/// The UI's textures it no longer needs, freed once no frame in flight uses them (the frame
+/// about to be drawn does not: egui frees only what it no longer draws).
 fn free_ui_textures(gpu: &mut Gpu, delta: &egui::TexturesDelta) -> crate::Result<()> {
     if !delta.free.is_empty() {
         gpu.renderer.wait_idle()?;
