@@ -210,10 +210,9 @@ fn cstr_field(bytes: &[std::ffi::c_char]) -> String {
     String::from_utf8_lossy(&bytes).into_owned()
 }
 
-/// The instance, with the validation layer (and synchronization validation) when asked, and
-/// whether VK_EXT_debug_utils is there (object names, labels, the validation messenger).
-/// The instance, with the validation layer when asked for and the instance extensions a window
-/// surface needs (`window`, empty when headless); also whether it has VK_EXT_debug_utils.
+/// The instance, with the validation layer (and synchronization validation) when asked and the
+/// instance extensions a window surface needs (`window`, empty when headless), and whether
+/// VK_EXT_debug_utils is there (object names, labels, the validation messenger).
 fn create_instance(entry: &ash::Entry, validation: bool, window: &[&CStr]) -> GpuResult<(ash::Instance, bool)> {
     let app_name = c"dvsgi";
     let app = vk::ApplicationInfo::default()
