@@ -33,7 +33,8 @@ pub fn with_suffix(stem: &Path, suffix: &str) -> PathBuf {
     PathBuf::from(s)
 }
 
-/// Write STEM.png, STEM.exr, STEM.toml and (if given) STEM-window.png; the paths written.
+/// Write STEM.png, STEM.exr, STEM.toml and (if given: the surface lets its images be read)
+/// STEM-window.png; the paths written.
 pub fn write(
     stem: &Path,
     frame: &FrameOutput,

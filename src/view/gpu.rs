@@ -122,7 +122,8 @@ pub fn render_frame(
     let ctx = renderer.ctx.clone();
     let copy = CopyPass { display: renderer.display_image().clone(), view: texture.image.clone() };
     let ui = UiPass { target: target.clone(), view: texture.image.clone(), acquired: a.acquired, draw: req.draw };
-    let download = if req.capture_window { Some(ImageDownload::new(&ctx, &target)?) } else { None };
+    let capture = req.capture_window && swapchain.readable;
+    let download = if capture { Some(ImageDownload::new(&ctx, &target)?) } else { None };
     let host = download.as_ref().map(|d| HostReadPass { buffers: vec![d.buffer.clone()] });
     let present = PresentPass { target, rendered: a.rendered };
     let mut passes: Vec<&dyn Pass> = vec![&copy, &ui];

@@ -76,6 +76,8 @@ pub struct Swapchain {
     pub format: vk::Format,
     pub extent: vk::Extent2D,
     pub present_mode: vk::PresentModeKHR,
+    /// Whether its images can be copied from (window captures; most surfaces allow it).
+    pub readable: bool,
     /// The images, tracked by the frame's barriers like any other.
     pub images: Vec<Arc<Image>>,
     /// Per image: signalled when its frame is drawn, waited for by its presentation.
@@ -158,6 +160,7 @@ impl Swapchain {
             format: format.format,
             extent,
             present_mode: mode,
+            readable: usage.contains(vk::ImageUsageFlags::TRANSFER_SRC),
             images: Vec::new(),
             rendered: Vec::new(),
             acquired: Vec::new(),
