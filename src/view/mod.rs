@@ -37,12 +37,9 @@ pub enum ViewError {
     Script { path: PathBuf, line: usize, message: String },
     #[error("UI renderer: {0}")]
     Ui(String),
-}
-
-impl From<crate::gpu::GpuError> for ViewError {
-    fn from(e: crate::gpu::GpuError) -> ViewError {
-        ViewError::Window(e.to_string())
-    }
+    /// The GPU layer's error, where a viewer step (surface, UI texture) meets one.
+    #[error(transparent)]
+    Gpu(#[from] crate::gpu::GpuError),
 }
 
 /// `dvsgi view`'s options beyond the common ones.
