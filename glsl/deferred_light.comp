@@ -1,6 +1,6 @@
 #version 460
 // Deferred lighting and composite: for every pixel, emission plus the sum over lights of
-// BRDF * irradiance * cos * shadow visibility (shadow maps, or the traced shadow cones), plus
+// BRDF * irradiance * cos * shadow visibility (shadow maps, or traced shadow cones or rays), plus
 // with GI the indirect light: (albedo * diffuse-cone mean radiance + Ks * specular-cone
 // radiance) * AO, or with ray-traced reflections albedo * diffuse * AO + Ks * reflections.
 // Output: linear radiance W/(sr m^2), or a debug view of the indirect light.
@@ -15,7 +15,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(constant_id = 0) const bool GI = false;
 layout(constant_id = 1) const bool GI_SPECULAR = false;
-layout(constant_id = 2) const bool CONE_SHADOWS = false;
+layout(constant_id = 2) const bool TRACED_SHADOWS = false;  // lights 0..3: gi_shadow (cones or rays)
 layout(constant_id = 3) const uint OUTPUT = 0;  // 0 final, 1 indirect light only, 2 AO factor
 // The specular target holds ray-traced reflections (gi.specular = "rt"): rays see occlusion
 // themselves, so the AO factor does not dim them.
@@ -56,7 +56,7 @@ void main() {
 
     float unscale = frame.radiance_scale.y;  // 16-bit inputs hold radiance * scale
     vec3 radiance = texelFetch(g_emission, px, 0).rgb * unscale;
-    vec4 cone_vis = CONE_SHADOWS ? imageLoad(gi_shadow, px) : vec4(1.0);
+    vec4 traced_vis = TRACED_SHADOWS ? imageLoad(gi_shadow, px) : vec4(1.0);
     uint light_count = frame.counts.z;
     for (uint i = 0u; i < light_count; ++i) {
         Light l = lights[i];
@@ -68,8 +68,8 @@ void main() {
             continue;
         }
         float vis = 1.0;
-        if (CONE_SHADOWS && i < 4u) {
-            vis = cone_vis[i];
+        if (TRACED_SHADOWS && i < 4u) {
+            vis = traced_vis[i];
         } else if (l.shadow.x >= 0) {
             int layer = shadow_view_index(l, P, frame.shadow.x + 1.5 * frame.shadow.y + 2.0, frame.shadow.z);
             // The bias against acne follows the geometric surface, the receiver's plane.

@@ -25,7 +25,8 @@ struct PtParams {
     mat4 inv_view_proj;
     vec4 camera;  // xyz unused (rays start on the near plane), w ray offset (scene units)
     uvec4 size;   // x width, y height, z light count, w max indirect bounces
-    uvec4 info;   // x seed, y 1: jitter over the pixel (box filter), 0: through its centre
+    uvec4 info;   // x seed, y 1: jitter over the pixel (box filter), 0: through its centre,
+                  // z triangle count, w 1: specular lobes at the first surface only
 };
 
 struct BvhNode {
@@ -307,6 +308,9 @@ vec3 radiance(vec3 o, vec3 d, float t_max, inout uint rng) {
         Hit h;
         if (!trace(o, d, t_max, false, h)) break;
         Surface s = surface_at(h, o, d);
+        // `reference --specular first`: later surfaces are Lambertian (voxel cone tracing's
+        // transport, without caustics or glossy interreflection).
+        if (depth > 0u && params.info.w == 1u) s.ks = vec3(0.0);
         vec3 V = -d;
         L += beta * s.emission;
         float eps = eps0 + 1e-6 * max(abs(s.P.x), max(abs(s.P.y), abs(s.P.z)));

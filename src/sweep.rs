@@ -77,6 +77,8 @@ pub enum Param {
     RtHitIndirect,
     /// `gi.specular_history`: frames the rays are averaged over while the view stands still.
     SpecularHistory,
+    /// `gi.shadows`, how direct light is shadowed, by name (index in [`SHADOW_KINDS`]).
+    Shadows,
 }
 
 /// The `gi.mode` values a sweep can compare, in the order of their index as a knob value.
@@ -91,6 +93,9 @@ pub const SPECULAR_SOURCES: [&str; 3] = ["off", "cone", "rt"];
 
 /// The `gi.rt_hit_indirect` values, in the order of their index as a knob value.
 pub const HIT_INDIRECT: [&str; 2] = ["cones", "voxel"];
+
+/// The `gi.shadows` values, in the order of their index as a knob value.
+pub const SHADOW_KINDS: [&str; 3] = ["shadow-map", "cone", "rt"];
 
 /// A name's index among a knob's names (NaN if it is not one).
 fn name_index(names: &[&str], name: &str) -> f64 {
@@ -109,6 +114,10 @@ fn cone() -> String {
     "cone".to_owned()
 }
 
+fn shadow_map() -> String {
+    "shadow-map".to_owned()
+}
+
 fn sixteen() -> u32 {
     16
 }
@@ -118,7 +127,7 @@ fn vct() -> String {
 }
 
 impl Param {
-    pub const ALL: [Param; 19] = [
+    pub const ALL: [Param; 20] = [
         Param::VoxelResolution,
         Param::DiffuseCones,
         Param::DiffuseConeAngle,
@@ -138,6 +147,7 @@ impl Param {
         Param::SpecularRays,
         Param::RtHitIndirect,
         Param::SpecularHistory,
+        Param::Shadows,
     ];
     /// The key under `[gi]`.
     pub fn key(self) -> &'static str {
@@ -161,6 +171,7 @@ impl Param {
             Param::SpecularRays => "specular_rays",
             Param::RtHitIndirect => "rt_hit_indirect",
             Param::SpecularHistory => "specular_history",
+            Param::Shadows => "shadows",
         }
     }
     /// Short prefix in configuration labels.
@@ -185,6 +196,7 @@ impl Param {
             Param::SpecularRays => "sr",
             Param::RtHitIndirect => "hit-",
             Param::SpecularHistory => "sh",
+            Param::Shadows => "shadow-",
         }
     }
     /// The names a knob's values are written as, for knobs that take names.
@@ -193,6 +205,7 @@ impl Param {
             Param::Mode => Some(&TECHNIQUES),
             Param::Specular => Some(&SPECULAR_SOURCES),
             Param::RtHitIndirect => Some(&HIT_INDIRECT),
+            Param::Shadows => Some(&SHADOW_KINDS),
             _ => None,
         }
     }
@@ -394,6 +407,9 @@ pub struct Row {
     /// `gi.specular_history` (1 in rows from before it was recorded: one frame's rays).
     #[serde(default = "one")]
     pub specular_history: u32,
+    /// `gi.shadows` ("shadow-map" in rows from before it was recorded).
+    #[serde(default = "shadow_map")]
+    pub shadows: String,
     /// Median host wall clock of a frame that updates the voxels (relight, mips, bounces)
     /// and traces: the cost when lights or objects move. The front is drawn against this.
     pub frame_ms: f64,
@@ -439,6 +455,7 @@ impl Row {
             specular_rays: s.specular_rays,
             rt_hit_indirect: serde_name(s.rt_hit_indirect).unwrap_or_else(voxel),
             specular_history: s.specular_history,
+            shadows: s.shadows.name().to_owned(),
             frame_ms: time[0],
             frame_p95_ms: time[1],
             static_frame_ms: time[2],
@@ -527,6 +544,7 @@ impl Row {
             Param::SpecularRays => self.specular_rays as f64,
             Param::RtHitIndirect => name_index(&HIT_INDIRECT, &self.rt_hit_indirect),
             Param::SpecularHistory => self.specular_history as f64,
+            Param::Shadows => name_index(&SHADOW_KINDS, &self.shadows),
         }
     }
 }
@@ -1038,6 +1056,12 @@ mod tests {
         };
         let r = Row::new("spec-rt".into(), &settings, [1.0; 3], 1.0, &c);
         assert_eq!((r.knob(Param::Specular), r.specular.as_str()), (2.0, "rt"));
+        let shadows = Grid::parse(&["shadows=shadow-map,rt".into()]).unwrap().configs();
+        assert_eq!(shadows[1].overrides(), vec![("gi.shadows".to_string(), "\"rt\"".to_string())]);
+        assert_eq!(shadows[1].label(), "shadow-rt");
+        let settings = crate::scene::GiSettings { shadows: crate::scene::DirectShadows::Rt, ..Default::default() };
+        let r = Row::new("shadow-rt".into(), &settings, [1.0; 3], 1.0, &c);
+        assert_eq!((r.knob(Param::Shadows), r.shadows.as_str()), (2.0, "rt"));
     }
 
     fn row(label: &str, ms: f64, rmse: f64, ssim: f64) -> Row {

@@ -67,7 +67,8 @@ fn sun(direction: Vec3, irradiance: f32) -> Light {
 
 fn trace(scene: &Scene, spp: u32, jitter: bool) -> ReferenceImage {
     let ctx = context();
-    let options = ReferenceOptions { spp, max_bounces: Some(0), seed: 3, batch_ms: 200.0, jitter };
+    let options =
+        ReferenceOptions { spp, max_bounces: Some(0), seed: 3, batch_ms: 200.0, jitter, ..Default::default() };
     let mut pt = PathTracer::new(&ctx, scene, options).expect("path tracer");
     pt.run(|_, _| {}).expect("trace");
     let image = pt.image().expect("read back");
@@ -117,7 +118,7 @@ fn at(out_radiance: impl Fn(u32, u32) -> [f32; 3], scene: &Scene, p: Vec3) -> Ve
 }
 
 #[test]
-fn an_alpha_masked_quad_is_cut_out_in_the_gbuffer_shadow_maps_and_path_tracer() {
+fn an_alpha_masked_quad_is_cut_out_in_the_gbuffer_shadow_maps_shadow_rays_and_path_tracer() {
     let s = masked_quad_scene();
     let (out, s) = render(&context(), s);
     let lit_floor = 3.0 * 0.8 / PI * (0.5f32).sqrt();
@@ -128,7 +129,17 @@ fn an_alpha_masked_quad_is_cut_out_in_the_gbuffer_shadow_maps_and_path_tracer() 
         let i = ((y * pt_image.width + x) * 3) as usize;
         Vec3::from_slice(&pt_image.mean[i..i + 3])
     };
-    for (who, look) in [("rasterizer", &raster as &dyn Fn(Vec3) -> Vec3), ("path tracer", &reference)] {
+    let mut lookers: Vec<(&str, Box<dyn Fn(Vec3) -> Vec3>)> = vec![("rasterizer", Box::new(raster))];
+    lookers.push(("path tracer", Box::new(reference)));
+    // Shadow rays (`gi.shadows = "rt"`) confirm the masked candidates as the path tracer does.
+    let ctx = context();
+    if ctx.info.optional.ray_query {
+        let mut rt = s.clone();
+        rt.settings.gi.shadows = DirectShadows::Rt;
+        let (out, rt) = render(&ctx, rt);
+        lookers.push(("shadow rays", Box::new(move |p| at(|x, y| out.radiance_at(x, y), &rt, p))));
+    }
+    for (who, look) in &lookers {
         // Seen through the hole: the floor, in the opaque half's shadow (not the red quad).
         let hole = look(Vec3::new(0.5, 0.0, 0.0));
         assert!(hole.max_element() < 0.02 * lit_floor, "{who}: floor through the hole {hole}");

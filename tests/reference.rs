@@ -4,7 +4,7 @@
 mod common;
 
 use common::{assert_no_validation_messages, context, load, repo};
-use dvsgi::reference::{PathTracer, ReferenceImage, ReferenceOptions};
+use dvsgi::reference::{PathTracer, ReferenceImage, ReferenceOptions, SpecularPaths};
 use dvsgi::render::Renderer;
 use dvsgi::scene::Scene;
 use std::path::PathBuf;
@@ -56,8 +56,12 @@ fn trace_batched(
     batch_ms: f64,
 ) -> ReferenceImage {
     let ctx = context();
-    let mut pt = PathTracer::new(&ctx, scene, ReferenceOptions { spp, max_bounces, seed, batch_ms, jitter })
-        .expect("path tracer");
+    let mut pt = PathTracer::new(
+        &ctx,
+        scene,
+        ReferenceOptions { spp, max_bounces, seed, batch_ms, jitter, ..Default::default() },
+    )
+    .expect("path tracer");
     pt.run(|_, _| {}).expect("trace");
     let image = pt.image().expect("read back");
     drop(pt);
@@ -158,6 +162,46 @@ fn direct_only_matches_the_rasterizer() {
     assert!(rel < 0.01, "mean direct radiance differs by {:.2}%", rel * 100.0);
     // Only shadow edges (PCF against exact visibility) may differ: measured 33 of 12288.
     assert!(far * 100 < n * 3, "{far} of {} values differ beyond noise", n * 3);
+}
+
+/// `--specular first` in a glossy furnace: every face emits 1, reflects nothing diffusely and
+/// has a Blinn-Phong lobe (Ks 0.5, exponent 20). With specular lobes at the first surface only,
+/// the surfaces a path meets later only emit, so the image must equal the full transport cut
+/// after one bounce (emission plus the lobe's reflection of it), and be darker than the full
+/// transport, whose lobes reflect each other. On a Lambertian furnace it changes nothing.
+#[test]
+fn specular_at_the_first_surface_only_cuts_glossy_interreflection_and_nothing_else() {
+    let dir = tempfile::tempdir().unwrap();
+    let glossy = furnace(dir.path(), [0.0; 3], [1.0; 3]);
+    let text = std::fs::read_to_string(&glossy).unwrap().replace(
+        "emission = [1.0, 1.0, 1.0]",
+        "emission = [1.0, 1.0, 1.0]\nspecular = [0.5, 0.5, 0.5]\nshininess = 20",
+    );
+    std::fs::write(&glossy, text).unwrap();
+    let scene = load(&glossy, &[]);
+    let first = trace_with(&scene, 64, None, SpecularPaths::FirstSurface);
+    let one_bounce = trace_with(&scene, 64, Some(1), SpecularPaths::All);
+    let all = trace_with(&scene, 64, None, SpecularPaths::All);
+    let mean = |i: &ReferenceImage| i.mean.iter().map(|&v| v as f64).sum::<f64>() / i.mean.len() as f64;
+    let sigma = |i: &ReferenceImage| (i.variance.iter().map(|&v| v as f64).sum::<f64>()).sqrt() / i.mean.len() as f64;
+    let (f, o, a) = (mean(&first), mean(&one_bounce), mean(&all));
+    println!("glossy furnace: first surface {f:.5}, one bounce {o:.5}, all {a:.5}");
+    assert!((f - o).abs() < 4.0 * (sigma(&first) + sigma(&one_bounce)), "first {f} against one bounce {o}");
+    assert!(f > 1.05 && a > f + 10.0 * (sigma(&first) + sigma(&all)), "first {f}, all {a}");
+    let lambert = load(&furnace(dir.path(), [0.5; 3], [1.0; 3]), &[]);
+    let lf = mean(&trace_with(&lambert, 64, None, SpecularPaths::FirstSurface));
+    assert!((lf - 2.0).abs() < 0.02, "a Lambertian furnace under --specular first: {lf}, expected 2");
+}
+
+fn trace_with(scene: &Scene, spp: u32, max_bounces: Option<u32>, specular: SpecularPaths) -> ReferenceImage {
+    let ctx = context();
+    let options = ReferenceOptions { spp, max_bounces, jitter: true, specular, ..Default::default() };
+    let mut pt = PathTracer::new(&ctx, scene, options).expect("path tracer");
+    pt.run(|_, _| {}).expect("trace");
+    let image = pt.image().expect("read back");
+    drop(pt);
+    assert_no_validation_messages(&ctx);
+    image
 }
 
 #[test]

@@ -185,7 +185,8 @@ The viewer exits at the end of the script; each script frame advances scene time
         /// voxel_resolution, diffuse_cones, diffuse_cone_angle, step, bounces, downsample, ao
         /// (0 or 1), bounce_cones, bounce_interleave, mode (the technique: none, vct, rsm, lpv,
         /// rsm+lpv), rsm_samples, rsm_radius, rsm_size, lpv_resolution, lpv_steps, specular
-        /// (off, cone, rt), specular_rays, rt_hit_indirect (cones, voxel), specular_history).
+        /// (off, cone, rt), specular_rays, rt_hit_indirect (cones, voxel), specular_history,
+        /// shadows (shadow-map, cone, rt)).
         /// Sweeps with other
         /// grids into the same directory add their rows to one frontier, e.g. the cone-tracing
         /// grid, then --grid mode=rsm ....
@@ -232,6 +233,12 @@ The viewer exits at the end of the script; each script frame advances scene time
         /// `render.supersample` > 1, whose renderer averages over the pixel too.
         #[arg(long)]
         jitter: bool,
+        /// Which surfaces reflect specularly: `all` (the ground truth) or `first`, the camera's
+        /// first surface only, later ones Lambertian: the transport voxel cone tracing models
+        /// (no caustics, no reflections of reflections), to tell its approximation error from
+        /// what it leaves out.
+        #[arg(long, value_enum, default_value_t = dvsgi::reference::SpecularPaths::All)]
+        specular: dvsgi::reference::SpecularPaths,
         #[command(flatten)]
         size: SizeArgs,
     },
@@ -277,9 +284,15 @@ fn run(cli: Cli) -> dvsgi::Result<()> {
             outln!("wrote {}/results.csv, results.json and frontier-*.svg", opts.out.display());
             Ok(())
         }
-        Command::Reference { scene, out, spp, bounces, seed, jitter, size } => {
-            let options =
-                dvsgi::reference::ReferenceOptions { spp, max_bounces: bounces, seed, jitter, ..Default::default() };
+        Command::Reference { scene, out, spp, bounces, seed, jitter, specular, size } => {
+            let options = dvsgi::reference::ReferenceOptions {
+                spp,
+                max_bounces: bounces,
+                seed,
+                jitter,
+                specular,
+                ..Default::default()
+            };
             reference(&cli.common, &scene, &out, options, size.overrides())
         }
         Command::View { scene, size, schedule, script, window_width, window_height, vsync } => {
@@ -613,7 +626,7 @@ fn reference(
     let start = std::time::Instant::now();
     let mut tracer = dvsgi::reference::PathTracer::new(&ctx, &scene, options)?;
     outln!(
-        "reference: {} triangles, BVH {} nodes (depth {}), {}x{}, {} spp, bounces {}, device {}",
+        "reference: {} triangles, BVH {} nodes (depth {}), {}x{}, {} spp, bounces {}, specular at {} surfaces, device {}",
         tracer.triangle_count,
         tracer.bvh_nodes,
         tracer.bvh_depth,
@@ -621,6 +634,7 @@ fn reference(
         scene.settings.height,
         options.spp,
         options.max_bounces.map(|b| b.to_string()).unwrap_or_else(|| "unlimited (Russian roulette)".into()),
+        options.specular.name(),
         ctx.info.name
     );
     let bar = indicatif::ProgressBar::new(options.spp as u64).with_style(

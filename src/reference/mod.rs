@@ -42,11 +42,44 @@ pub struct ReferenceOptions {
     /// with `render.supersample` > 1 is always jittered: its renderer averages over the same
     /// footprint.
     pub jitter: bool,
+    /// Which surfaces of a path reflect specularly.
+    pub specular: SpecularPaths,
 }
 
 impl Default for ReferenceOptions {
     fn default() -> Self {
-        ReferenceOptions { spp: 256, max_bounces: None, seed: 1, batch_ms: 400.0, jitter: false }
+        ReferenceOptions {
+            spp: 256,
+            max_bounces: None,
+            seed: 1,
+            batch_ms: 400.0,
+            jitter: false,
+            specular: SpecularPaths::All,
+        }
+    }
+}
+
+/// Which surfaces of a path have their specular (Blinn-Phong) lobe (`reference --specular`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum SpecularPaths {
+    /// Every surface: the ground truth.
+    #[default]
+    All,
+    /// Only the first surface the camera sees; every later one is Lambertian. This is the light
+    /// transport voxel cone tracing models (its voxels store diffuse light), so it has no
+    /// caustics (light a mirror throws onto a wall) and no reflections of glossy surfaces in
+    /// others. The renderer's error against it is its approximation alone; the difference
+    /// between the two references is what the model leaves out.
+    #[value(name = "first")]
+    FirstSurface,
+}
+
+impl SpecularPaths {
+    pub fn name(self) -> &'static str {
+        match self {
+            SpecularPaths::All => "all",
+            SpecularPaths::FirstSurface => "first",
+        }
     }
 }
 
@@ -319,7 +352,8 @@ impl SceneBuffers {
 }
 
 /// The trace's parameters: the camera's inverse view-projection, the ray offset (scaled to
-/// the scene's `bounds`), the image size, lights, bounce limit, seed, jitter and triangle count.
+/// the scene's `bounds`), the image size, lights, bounce limit, seed, jitter, triangle count
+/// and which surfaces reflect specularly.
 fn trace_params(
     scene: &Scene,
     options: &ReferenceOptions,
@@ -336,7 +370,12 @@ fn trace_params(
         inv_view_proj: view_proj.inverse().to_cols_array_2d(),
         camera: [0.0, 0.0, 0.0, 1e-5 * extent],
         size: [width, height, light_count, options.max_bounces.unwrap_or(UNLIMITED_BOUNCES).min(UNLIMITED_BOUNCES)],
-        info: [options.seed, (options.jitter || s.supersample > 1) as u32, triangle_count, 0],
+        info: [
+            options.seed,
+            (options.jitter || s.supersample > 1) as u32,
+            triangle_count,
+            (options.specular == SpecularPaths::FirstSurface) as u32,
+        ],
     }
 }
 

@@ -4,11 +4,12 @@
 use super::graph::{Pass, QueueKind};
 use super::passes::gbuffer::{GBuffer, GBufferPass};
 use super::passes::gi_trace::{GiAddPass, GiPlaceholders, GiTargets, GiTracePass, GiUpsamplePass};
-use super::passes::lighting::{GiInputs, LightingOutput, LightingPass};
+use super::passes::lighting::{GiInputs, LightingInputs, LightingOutput, LightingPass};
 use super::passes::lpv::{LpvInjectPass, LpvLookupPass, LpvPropagatePass, LpvVolumes};
 use super::passes::readback::ReadbackPasses;
 use super::passes::resolve::ResolvePass;
 use super::passes::rsm::{RsmGatherPass, RsmMaps, RsmPass};
+use super::passes::rt_shadow::RtShadowPass;
 use super::passes::shadow::ShadowPass;
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::upload::UploadPass;
@@ -171,22 +172,42 @@ pub struct ConePasses {
     pub trace: GiTracePass,
     /// Only with `gi.specular = "rt"` and some glossy material: the reflections, traced into
     /// the specular target the cone would have written.
-    pub rays: Option<RayPasses>,
+    pub reflect: Option<RtReflectPass>,
     /// Only with `gi.downsample` > 1.
     pub upsample: Option<GiUpsamplePass>,
     /// What the tracing writes at 1/k (`gi.downsample`): diffuse, specular, shadows.
     pub low: GiTargets,
 }
 
-/// Ray-traced reflections: the scene's acceleration structures and their passes.
+/// The scene's acceleration structures, for ray-traced reflections or shadows.
 pub struct RayPasses {
     pub scene: Arc<SceneRays>,
     /// Only when some object moves: the top level, rebuilt from the frame's instances.
     pub build: Option<TopLevelBuildPass>,
-    pub reflect: RtReflectPass,
+}
+
+impl RayPasses {
+    /// Where the frame traces rays (`gi.specular = "rt"` with cones to trace and some glossy
+    /// material, or `gi.shadows = "rt"`): the scene's structures, built now.
+    fn new(ctx: &Arc<Context>, scene: &Scene, scene_gpu: &SceneGpu, cones: bool) -> GpuResult<Option<RayPasses>> {
+        let s = &scene.settings;
+        let reflections = cones && s.gi.specular == SpecularSource::Rt && glossy(scene);
+        if !reflections && !rt_shadows(scene) {
+            return Ok(None);
+        }
+        let rays = Arc::new(SceneRays::new(ctx, scene, scene_gpu, s.time)?);
+        Ok(Some(RayPasses { build: rays.dynamic.then(|| TopLevelBuildPass::new(&rays)), scene: rays }))
+    }
+}
+
+/// Some material reflects specularly.
+fn glossy(scene: &Scene) -> bool {
+    scene.materials.iter().any(|m| m.specular.max_element() > 0.0)
 }
 
 impl ConePasses {
+    /// The tracer and its targets; the reflections where `rays` exist for them.
+    #[allow(clippy::too_many_arguments)]
     fn new(
         ctx: &Arc<Context>,
         scene: &Scene,
@@ -195,11 +216,11 @@ impl ConePasses {
         gbuffer: &Arc<GBuffer>,
         volumes: &Arc<VoxelVolumes>,
         placeholders: &Arc<GiPlaceholders>,
+        rays: Option<&Arc<SceneRays>>,
     ) -> GpuResult<ConePasses> {
         let s = &scene.settings;
         let (width, height) = s.internal_size();
-        let glossy = scene.materials.iter().any(|m| m.specular.max_element() > 0.0);
-        let specular = s.gi.specular != SpecularSource::Off && glossy;
+        let specular = s.gi.specular != SpecularSource::Off && glossy(scene);
         let rt = specular && s.gi.specular == SpecularSource::Rt;
         let cone_shadows = cone_shadows(scene);
         let k = s.gi.downsample;
@@ -214,29 +235,22 @@ impl ConePasses {
         };
         // With rays the cone tracer leaves the specular target to the reflection pass.
         let traced = GiTargets { specular: if rt { None } else { low.specular.clone() }, ..low.clone() };
-        let rays = match (rt, &low.specular) {
-            (true, Some(target)) => {
-                let rays = Arc::new(SceneRays::new(ctx, scene, scene_gpu, s.time)?);
-                Some(RayPasses {
-                    build: rays.dynamic.then(|| TopLevelBuildPass::new(&rays)),
-                    reflect: RtReflectPass::new(
-                        ctx,
-                        frame,
-                        gbuffer,
-                        volumes,
-                        scene_gpu,
-                        &rays,
-                        target,
-                        (s.gi.specular_rays, s.gi.rt_hit_indirect),
-                    )?,
-                    scene: rays,
-                })
-            }
+        let reflect = match (rt, &low.specular, rays) {
+            (true, Some(target), Some(rays)) => Some(RtReflectPass::new(
+                ctx,
+                frame,
+                gbuffer,
+                volumes,
+                scene_gpu,
+                rays,
+                target,
+                (s.gi.specular_rays, s.gi.rt_hit_indirect),
+            )?),
             _ => None,
         };
         Ok(ConePasses {
             trace: GiTracePass::new(ctx, frame, gbuffer, volumes, traced, placeholders)?,
-            rays,
+            reflect,
             upsample,
             low,
         })
@@ -250,8 +264,8 @@ impl ConePasses {
     /// The passes after the G-buffer, in order.
     fn push<'a>(&'a self, passes: &mut Vec<&'a dyn Pass>) {
         passes.push(&self.trace);
-        if let Some(r) = &self.rays {
-            passes.push(&r.reflect);
+        if let Some(r) = &self.reflect {
+            passes.push(r);
         }
         if let Some(up) = &self.upsample {
             passes.push(up);
@@ -431,6 +445,29 @@ pub enum Shading {
     MipView(VoxelMipViewPass),
 }
 
+impl Shading {
+    /// A voxel view where `render.view` asks for one, else the lighting pass over `lit`.
+    fn new(
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        frame: &FrameBuffers,
+        voxels: Option<&VoxelPasses>,
+        lit: LightingInputs,
+    ) -> GpuResult<Shading> {
+        let s = &scene.settings;
+        let radiance = lit.radiance;
+        Ok(match (voxels, s.view) {
+            (Some(v), View::VoxelMip) => {
+                Shading::MipView(VoxelMipViewPass::new(ctx, frame, &v.volumes, s.view_lod, s.view_direction, radiance)?)
+            }
+            (Some(v), view) if !matches!(view, View::Final | View::Indirect | View::Ao) => {
+                Shading::VoxelView(VoxelViewPass::new(ctx, frame, &v.volumes, view, radiance)?)
+            }
+            _ => Shading::Lighting(LightingPass::new(ctx, frame, lit, LightingOutput::of(s.view))?),
+        })
+    }
+}
+
 /// Every pass the scene needs, created once.
 pub struct FramePasses {
     /// Writes the frame's host data (uniforms, lights, shadow views, instances).
@@ -439,6 +476,10 @@ pub struct FramePasses {
     /// Only when some light casts shadows that are resolved with shadow maps.
     pub shadow: Option<ShadowPass>,
     pub gbuffer: GBufferPass,
+    /// Only where rays are traced (`gi.specular` or `gi.shadows` = "rt").
+    pub rays: Option<RayPasses>,
+    /// Only with `gi.shadows = "rt"`: the direct light's shadow rays.
+    pub rt_shadow: Option<RtShadowPass>,
     /// Only when the shading uses cone-traced light.
     pub cones: Option<ConePasses>,
     /// Only with `gi.mode = "rsm"` and some light that casts shadows.
@@ -486,6 +527,7 @@ impl FramePasses {
         shadow_views: u32,
     ) -> GpuResult<FramePasses> {
         let s = &scene.settings;
+        refuse_rays_without_queries(ctx, s)?;
         let (width, height) = s.internal_size();
         let gbuffer = Arc::new(GBuffer::new(ctx, width, height)?);
         let atlas = shadow_atlas(ctx, s.shadow_map_size, shadow_views)?;
@@ -498,13 +540,23 @@ impl FramePasses {
             None
         };
         let placeholders = Arc::new(GiPlaceholders::new(ctx)?);
-        if s.gi.specular == SpecularSource::Rt && !ctx.info.optional.ray_query {
-            return Err(missing_ray_queries(ctx));
-        }
-        let cones = match &voxels {
-            Some(v) if v.volumes.needs.cones && !voxel_view => {
-                Some(ConePasses::new(ctx, scene, scene_gpu, frame, &gbuffer, &v.volumes, &placeholders)?)
-            }
+        let cones_traced = matches!(&voxels, Some(v) if v.volumes.needs.cones && !voxel_view);
+        let rays = RayPasses::new(ctx, scene, scene_gpu, cones_traced)?;
+        let cones = match (&voxels, cones_traced) {
+            (Some(v), true) => Some(ConePasses::new(
+                ctx,
+                scene,
+                scene_gpu,
+                frame,
+                &gbuffer,
+                &v.volumes,
+                &placeholders,
+                rays.as_ref().map(|r| &r.scene),
+            )?),
+            _ => None,
+        };
+        let rt_shadow = match (&rays, rt_shadows(scene)) {
+            (Some(r), true) => Some(RtShadowPass::new(ctx, frame, &gbuffer, scene_gpu, &r.scene)?),
             _ => None,
         };
         let rsm = if s.gi.uses_rsm() && !voxel_view {
@@ -512,48 +564,37 @@ impl FramePasses {
         } else {
             None
         };
-        let shading = match (&voxels, s.view) {
-            (Some(v), View::VoxelMip) => Shading::MipView(VoxelMipViewPass::new(
-                ctx,
-                frame,
-                &v.volumes,
-                s.view_lod,
-                s.view_direction,
-                &radiance,
-            )?),
-            (Some(v), _) if voxel_view => {
-                Shading::VoxelView(VoxelViewPass::new(ctx, frame, &v.volumes, s.view, &radiance)?)
-            }
-            _ => Shading::Lighting(LightingPass::new(
-                ctx,
-                frame,
-                &gbuffer,
-                &atlas,
-                &radiance,
-                gi_inputs(cones.as_ref(), rsm.as_ref()),
-                &placeholders,
-                LightingOutput::of(s.view),
-            )?),
+        let lit = LightingInputs {
+            gbuffer: &gbuffer,
+            shadow_atlas: &atlas,
+            radiance: &radiance,
+            gi: gi_inputs(cones.as_ref(), rsm.as_ref()),
+            shadow_visibility: shadow_visibility(rt_shadow.as_ref(), cones.as_ref()),
+            placeholders: &placeholders,
         };
+        let shading = Shading::new(ctx, scene, frame, voxels.as_ref(), lit)?;
         let shadow =
             if shadow_views > 0 { Some(ShadowPass::new(ctx, scene_gpu, frame, &atlas, shadow_views)?) } else { None };
         Ok(FramePasses {
-            upload: frame_upload(frame, scene_gpu, cones.as_ref()),
+            upload: frame_upload(frame, scene_gpu, rays.as_ref()),
             voxels,
             shadow,
             gbuffer: GBufferPass::new(ctx, scene_gpu, frame, &gbuffer)?,
+            targets: [&gbuffer.depth, &gbuffer.albedo, &gbuffer.normal, &gbuffer.specular, &gbuffer.emission]
+                .into_iter()
+                .chain([&atlas, &radiance, &display])
+                .chain((!Arc::ptr_eq(&shown, &radiance)).then_some(&shown))
+                .chain(rt_shadow.as_ref().map(|r| &r.visibility))
+                .cloned()
+                .collect(),
+            rays,
+            rt_shadow,
             cones,
             rsm,
             shading,
             tonemap: TonemapPass::new(ctx, frame, &shown, &display)?,
             resolve,
             readback: None,
-            targets: [&gbuffer.depth, &gbuffer.albedo, &gbuffer.normal, &gbuffer.specular, &gbuffer.emission]
-                .into_iter()
-                .chain([&atlas, &radiance, &display])
-                .chain((!Arc::ptr_eq(&shown, &radiance)).then_some(&shown))
-                .cloned()
-                .collect(),
         })
     }
 
@@ -587,12 +628,12 @@ impl FramePasses {
         Ok(())
     }
 
-    /// The ray-traced reflections' acceleration structures, where they exist.
+    /// The scene's acceleration structures, where rays are traced.
     pub fn rays(&self) -> Option<&RayPasses> {
-        self.cones.as_ref().and_then(|c| c.rays.as_ref())
+        self.rays.as_ref()
     }
 
-    /// The top level's rebuild, where objects move and reflections are ray traced.
+    /// The top level's rebuild, where objects move and rays are traced.
     fn top_level_build(&self) -> Option<&TopLevelBuildPass> {
         self.rays().and_then(|r| r.build.as_ref())
     }
@@ -664,6 +705,9 @@ impl FramePasses {
                     passes.push(build);
                 }
                 passes.push(&self.gbuffer);
+                if let Some(r) = &self.rt_shadow {
+                    passes.push(r);
+                }
                 if let Some(c) = &self.cones {
                     c.push(&mut passes);
                 }
@@ -709,11 +753,11 @@ fn output_images(ctx: &Arc<Context>, s: &RenderSettings) -> GpuResult<(Arc<Image
 }
 
 /// The frame's host data: uniforms, lights, shadow views, instances, and the top level's
-/// instances where reflections are ray traced among moving objects.
-fn frame_upload(frame: &FrameBuffers, scene_gpu: &SceneGpu, cones: Option<&ConePasses>) -> UploadPass {
+/// instances where rays are traced among moving objects.
+fn frame_upload(frame: &FrameBuffers, scene_gpu: &SceneGpu, rays: Option<&RayPasses>) -> UploadPass {
     let mut uploads =
         vec![frame.uniforms.clone(), frame.lights.clone(), frame.shadow_views.clone(), scene_gpu.instances.clone()];
-    if let Some(r) = cones.and_then(|c| c.rays.as_ref()).filter(|r| r.build.is_some()) {
+    if let Some(r) = rays.filter(|r| r.build.is_some()) {
         uploads.push(r.scene.top.instances.clone());
     }
     UploadPass::new(uploads)
@@ -733,22 +777,37 @@ fn shadow_atlas(ctx: &Arc<Context>, size: u32, views: u32) -> GpuResult<Arc<Imag
 /// The indirect light the lighting pass composes: the traced cones (and rays), else the RSM
 /// gather, else none.
 fn gi_inputs<'a>(cones: Option<&'a ConePasses>, rsm: Option<&'a RsmPasses>) -> Option<GiInputs<'a>> {
-    let cone_inputs = cones.map(|c| GiInputs {
-        targets: c.output(),
-        cone_shadows: c.low.shadow.is_some(),
-        rt_specular: c.rays.is_some(),
-    });
-    cone_inputs.or(rsm.map(|r| GiInputs { targets: r.targets(), cone_shadows: false, rt_specular: false }))
+    let cone_inputs = cones.map(|c| GiInputs { targets: c.output(), rt_specular: c.reflect.is_some() });
+    cone_inputs.or(rsm.map(|r| GiInputs { targets: r.targets(), rt_specular: false }))
 }
 
-/// Direct light is shadowed by cones (`gi.shadows = "cone"`, cones traced per pixel).
+/// The per-pixel visibility of the first four lights that replaces their shadow maps in the
+/// direct light: the shadow rays', else the shadow cones' (at full resolution), else none.
+fn shadow_visibility<'a>(rt: Option<&'a RtShadowPass>, cones: Option<&'a ConePasses>) -> Option<&'a Arc<Image>> {
+    rt.map(|r| &r.visibility).or_else(|| cones.and_then(|c| c.output().shadow.as_ref()))
+}
+
+/// `gi.specular = "rt"` or `gi.shadows = "rt"` on a device without ray queries: refused.
+fn refuse_rays_without_queries(ctx: &Context, s: &RenderSettings) -> GpuResult<()> {
+    if ctx.info.optional.ray_query {
+        return Ok(());
+    }
+    if s.gi.specular == SpecularSource::Rt {
+        return Err(missing_ray_queries(ctx, "gi.specular", "cone"));
+    }
+    if s.gi.shadows == DirectShadows::Rt {
+        return Err(missing_ray_queries(ctx, "gi.shadows", "shadow-map"));
+    }
+    Ok(())
+}
+
 /// The shadow-map views a frame renders: every shadowed light's views where something samples
-/// them (direct light, unless cones shadow every shadowed light; or voxel lighting with
-/// shadow-map occlusion), else 0.
+/// them (direct light, unless cones or rays shadow every shadowed light; or voxel lighting
+/// with shadow-map occlusion), else 0.
 pub fn shadow_map_views(scene: &Scene) -> u32 {
     let s = &scene.settings;
     let voxel_lighting = s.gi.mode == GiMode::Vct || matches!(s.view, View::VoxelRadiance | View::VoxelMip);
-    let direct_maps = !cone_shadows(scene) || scene.lights.len() > 4;
+    let direct_maps = !(cone_shadows(scene) || rt_shadows(scene)) || scene.lights.len() > 4;
     let voxel_maps = voxel_lighting && s.gi.occlusion == VoxelOcclusion::ShadowMap;
     if direct_maps || voxel_maps {
         crate::render::lights::shadow_view_count(scene)
@@ -757,9 +816,16 @@ pub fn shadow_map_views(scene: &Scene) -> u32 {
     }
 }
 
+/// Direct light is shadowed by cones (`gi.shadows = "cone"`, cones traced per pixel).
 pub fn cone_shadows(scene: &Scene) -> bool {
     let s = &scene.settings;
     s.gi.mode == GiMode::Vct
         && s.gi.shadows == DirectShadows::Cone
         && matches!(s.view, View::Final | View::Indirect | View::Ao)
+}
+
+/// Direct light is shadowed by rays (`gi.shadows = "rt"`, a shadow ray per pixel and light).
+pub fn rt_shadows(scene: &Scene) -> bool {
+    let s = &scene.settings;
+    s.gi.shadows == DirectShadows::Rt && matches!(s.view, View::Final | View::Indirect | View::Ao)
 }

@@ -1,7 +1,8 @@
-//! Ray-traced reflections (`gi.specular = "rt"`): the scene's acceleration structures (one
-//! bottom level per draw, a top level with one instance per draw), the pass that rebuilds the
-//! top level when dynamic objects move, and the pass that traces the reflections into the cone
-//! tracer's specular target (glsl/rt_reflect.comp).
+//! Ray tracing (`gi.specular = "rt"`, `gi.shadows = "rt"`): the scene's acceleration
+//! structures (one bottom level per draw, a top level with one instance per draw), the pass that
+//! rebuilds the top level when dynamic objects move, the pass that traces the reflections into
+//! the cone tracer's specular target (glsl/rt_reflect.comp), and the pass that traces the direct
+//! light's shadow rays (glsl/rt_shadow.comp).
 
 use super::passes::gbuffer::GBuffer;
 use super::scene_gpu::SceneGpu;
@@ -27,11 +28,12 @@ struct RtDraw {
     pad: u32,
 }
 
-/// The refusal of `gi.specular = "rt"` on a device without ray queries.
-pub fn missing_ray_queries(ctx: &Context) -> GpuError {
+/// The refusal of a ray-traced setting (`gi.specular = "rt"`, `gi.shadows = "rt"`) on a
+/// device without ray queries: `key` is the setting, `alternative` what to use instead.
+pub fn missing_ray_queries(ctx: &Context, key: &str, alternative: &str) -> GpuError {
     GpuError::Limit(format!(
-        "gi.specular = \"rt\" needs ray queries (VK_KHR_ray_query with VK_KHR_acceleration_structure), which {} \
-         does not have; use gi.specular = \"cone\"",
+        "{key} = \"rt\" needs ray queries (VK_KHR_ray_query with VK_KHR_acceleration_structure), which {} \
+         does not have; use {key} = \"{alternative}\"",
         ctx.info.name
     ))
 }

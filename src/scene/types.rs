@@ -472,6 +472,20 @@ pub enum DirectShadows {
     /// A cone traced through the voxels toward each light (soft; `shadow_cone_angle`); at most
     /// four shadow-casting lights.
     Cone,
+    /// A shadow ray through the scene's triangles toward each light from every pixel (ray
+    /// queries; hard and exact, alpha masks cut as in the path tracer), for the first four
+    /// shadow-casting lights; any later ones keep their shadow maps. Any `gi.mode`.
+    Rt,
+}
+
+impl DirectShadows {
+    pub fn name(self) -> &'static str {
+        match self {
+            DirectShadows::ShadowMap => "shadow-map",
+            DirectShadows::Cone => "cone",
+            DirectShadows::Rt => "rt",
+        }
+    }
 }
 
 /// Direction shown by the `voxel-mip` view.

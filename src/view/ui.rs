@@ -60,7 +60,7 @@ fn knobs(technique: &str) -> Vec<Knob> {
             Toggle("gi.bounce_feedback", "bounce feedback"),
             Choice("gi.downsample", "trace at 1/k", &["1", "2", "4"]),
             Choice("gi.specular", "specular", &["\"cone\"", "\"rt\"", "\"off\""]),
-            Choice("gi.shadows", "shadows", &["\"shadow-map\"", "\"cone\""]),
+            Choice("gi.shadows", "shadows", &["\"shadow-map\"", "\"cone\"", "\"rt\""]),
             Toggle("gi.ao", "ambient occlusion"),
             Number("gi.step", "cone step", 0.1, 2.0),
         ]

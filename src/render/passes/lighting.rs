@@ -40,19 +40,31 @@ impl LightingOutput {
     }
 }
 
-/// The cone-traced inputs of the composite.
+/// The indirect light of the composite (cone-traced, or gathered from reflective shadow maps).
 pub struct GiInputs<'a> {
     pub targets: &'a GiTargets,
-    pub cone_shadows: bool,
     /// The specular target holds ray-traced reflections (not multiplied by the AO factor).
     pub rt_specular: bool,
+}
+
+/// What the lighting pass reads and writes.
+pub struct LightingInputs<'a> {
+    pub gbuffer: &'a Arc<GBuffer>,
+    pub shadow_atlas: &'a Arc<Image>,
+    /// Written: the shaded radiance.
+    pub radiance: &'a Arc<Image>,
+    pub gi: Option<GiInputs<'a>>,
+    /// Traced visibility of lights 0..3 (shadow cones or rays), in place of their shadow maps.
+    pub shadow_visibility: Option<&'a Arc<Image>>,
+    pub placeholders: &'a Arc<GiPlaceholders>,
 }
 
 pub struct LightingPass {
     frame: FrameBuffers,
     gbuffer: Arc<GBuffer>,
     shadow_atlas: Arc<Image>,
-    gi: Option<GiTargets>,
+    /// The indirect light's targets and the traced visibility (placeholders where missing).
+    gi: GiTargets,
     placeholders: Arc<GiPlaceholders>,
     pub radiance: Arc<Image>,
     pipeline: Pipeline,
@@ -61,19 +73,20 @@ pub struct LightingPass {
 }
 
 impl LightingPass {
-    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Arc<Context>,
         frame: &FrameBuffers,
-        gbuffer: &Arc<GBuffer>,
-        shadow_atlas: &Arc<Image>,
-        radiance: &Arc<Image>,
-        gi: Option<GiInputs>,
-        placeholders: &Arc<GiPlaceholders>,
+        inputs: LightingInputs,
         output: LightingOutput,
     ) -> GpuResult<Self> {
-        let none = GiTargets { diffuse: placeholders.color.clone(), specular: None, shadow: None };
-        let targets = gi.as_ref().map(|g| g.targets).unwrap_or(&none);
+        let LightingInputs { gbuffer, shadow_atlas, radiance, gi, shadow_visibility, placeholders } = inputs;
+        // The indirect light's targets (placeholders without GI) and the traced visibility.
+        let targets = match &gi {
+            Some(g) => GiTargets { shadow: shadow_visibility.cloned(), ..g.targets.clone() },
+            None => {
+                GiTargets { diffuse: placeholders.color.clone(), specular: None, shadow: shadow_visibility.cloned() }
+            }
+        };
         let [gd, gs, gsh] = targets.binds(placeholders);
         let point = GBuffer::sampler(ctx)?;
         let compare = Sampler::new(ctx, "shadow compare sampler", &shadow_sampler_info())?;
@@ -103,7 +116,7 @@ impl LightingPass {
         let spec = [
             (0, u32::from(gi.is_some())),
             (1, u32::from(targets.specular.is_some() && !rt_specular)),
-            (2, u32::from(gi.as_ref().is_some_and(|g| g.cone_shadows))),
+            (2, u32::from(shadow_visibility.is_some())),
             (3, output as u32),
             (4, u32::from(targets.specular.is_some() && rt_specular)),
         ];
@@ -113,7 +126,7 @@ impl LightingPass {
             frame: frame.clone(),
             gbuffer: gbuffer.clone(),
             shadow_atlas: shadow_atlas.clone(),
-            gi: gi.map(|g| g.targets.clone()),
+            gi: targets,
             placeholders: placeholders.clone(),
             radiance: radiance.clone(),
             pipeline,
@@ -138,12 +151,11 @@ impl Pass for LightingPass {
             Use::image(&self.shadow_atlas, Access::ComputeShaderReadDepth),
             Use::overwrite(&self.radiance, Access::ComputeShaderWrite),
         ];
-        match &self.gi {
-            Some(t) => uses.extend(t.uses(&self.placeholders, Access::ComputeShaderReadStorage)),
-            None => {
-                let p = &self.placeholders;
-                uses.push(Use::image(&p.color, Access::ComputeShaderReadStorage));
-                uses.push(Use::image(&p.shadow, Access::ComputeShaderReadStorage));
+        let bound = self.gi.bound(&self.placeholders);
+        for (i, image) in bound.iter().enumerate() {
+            // Without GI the diffuse and specular placeholders are one image: declared once.
+            if !bound[..i].iter().any(|b| Arc::ptr_eq(b, image)) {
+                uses.push(Use::image(image, Access::ComputeShaderReadStorage));
             }
         }
         uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));

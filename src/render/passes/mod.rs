@@ -7,6 +7,7 @@ pub mod lpv;
 pub mod readback;
 pub mod resolve;
 pub mod rsm;
+pub mod rt_shadow;
 pub mod shadow;
 pub mod tonemap;
 pub mod upload;
