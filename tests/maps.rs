@@ -111,6 +111,9 @@ fn masked_quad_scene() -> Scene {
     s
 }
 
+/// Radiance at the pixel that shows world point p, as some renderer made it.
+type Look<'a> = Box<dyn Fn(Vec3) -> Vec3 + 'a>;
+
 /// Radiance at the pixel that shows world point p.
 fn at(out_radiance: impl Fn(u32, u32) -> [f32; 3], scene: &Scene, p: Vec3) -> Vec3 {
     let (x, y) = project(scene, p);
@@ -129,7 +132,7 @@ fn an_alpha_masked_quad_is_cut_out_in_the_gbuffer_shadow_maps_shadow_rays_and_pa
         let i = ((y * pt_image.width + x) * 3) as usize;
         Vec3::from_slice(&pt_image.mean[i..i + 3])
     };
-    let mut lookers: Vec<(&str, Box<dyn Fn(Vec3) -> Vec3>)> = vec![("rasterizer", Box::new(raster))];
+    let mut lookers: Vec<(&str, Look)> = vec![("rasterizer", Box::new(raster))];
     lookers.push(("path tracer", Box::new(reference)));
     // Shadow rays (`gi.shadows = "rt"`) confirm the masked candidates as the path tracer does.
     let ctx = context();

@@ -2,7 +2,9 @@
 //! mirror reflects a lit wall by the BRDF's specular reflectance, an alpha mask lets the
 //! reflection through where it cuts, empty space reflects black, a moving object is seen in the
 //! mirror in the frame it moves, every schedule mode renders the same image, and glossy
-//! reflections average their rays over the frames the view stands still. Shadows
+//! reflections average their rays over the frames the view stands still; on the mirror Cornell
+//! box, with the reflected light made exact in both, the rays' mirror is the path tracer's
+//! within 5%. Shadows
 //! (`gi.shadows = "rt"`): the direct light of the Cornell box is the path tracer's, pixel for
 //! pixel, in every schedule mode (tests/maps.rs checks an alpha-masked occluder). Devices
 //! without ray queries refuse `rt` with one line.
@@ -10,7 +12,9 @@
 mod common;
 
 use common::*;
-use dvsgi::reference::{PathTracer, ReferenceOptions};
+use dvsgi::metrics::LinearImage;
+use dvsgi::reference::{PathTracer, ReferenceOptions, SpecularPaths};
+use dvsgi::regions::{region_stats, Grouping, Pair, RegionMap};
 use dvsgi::render::{Mode, RenderOptions, Renderer};
 use dvsgi::scene::*;
 use glam::{Mat4, Vec2, Vec3};
@@ -269,6 +273,52 @@ fn rt_needs_ray_queries_and_says_so() {
     assert_no_validation_messages(&ctx);
 }
 
+/// The study's comparison on the mirror Cornell box (the tall block: Ks 0.95, exponent 1000),
+/// with the light at the reflected surfaces made the same in both renderers: one bounce
+/// (`gi.bounces = 0` renders what the path tracer's `--bounces 1` traces, the reflected surfaces
+/// lit by the lights alone) and specular lobes at the first surface only (the renderer's
+/// transport). What is left in the mirror's region is the reflection's own error: within 5%
+/// with rays. The cone's is printed beside it (ACCURACY.md: 24% too bright at 256x256).
+#[test]
+fn the_mirror_box_reflects_its_light_within_five_percent_with_rays() {
+    let ctx = context();
+    if !has_ray_queries(&ctx) {
+        return;
+    }
+    let setup = [("render.width", "64"), ("render.height", "64"), ("gi.bounces", "0")];
+    let scene = common::load(&repo().join("scenes/cornell-mirror.toml"), &setup);
+    let options = ReferenceOptions {
+        spp: 256,
+        max_bounces: Some(1),
+        specular: SpecularPaths::FirstSurface,
+        ..Default::default()
+    };
+    let mut pt = PathTracer::new(&ctx, &scene, options).expect("path tracer");
+    pt.run(|_, _| {}).expect("trace");
+    let reference = pt.image().expect("read back");
+    drop(pt);
+    let reference = LinearImage { width: 64, height: 64, rgb: reference.mean };
+    let map = RegionMap::trace(&scene, 64, 64);
+    let mirror_ratio = |specular: SpecularSource| {
+        let mut s = scene.clone();
+        s.settings.gi.specular = specular;
+        let (out, _) = render(&ctx, s);
+        let rgb = out.radiance.chunks(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+        let test = LinearImage { width: 64, height: 64, rgb };
+        let pair = Pair { test: &test, reference: &reference, reference_variance: None };
+        let stats = region_stats(&map, &pair);
+        let mirror =
+            stats.iter().find(|r| r.grouping == Grouping::Material && r.name == "tallBox").expect("the mirror");
+        (mirror.ratio, mirror.pixels)
+    };
+    let (rays, pixels) = mirror_ratio(SpecularSource::Rt);
+    let (cone, _) = mirror_ratio(SpecularSource::Cone);
+    println!("the mirror ({pixels} pixels) against the reference: rays {rays:.4}, cone {cone:.4}");
+    assert!(pixels > 200, "the mirror covers {pixels} pixels");
+    assert!((rays - 1.0).abs() <= 0.05, "the rays' mirror is {rays:.4} of the reference");
+    assert_no_validation_messages(&ctx);
+}
+
 /// The Cornell box's direct light (`gi.mode = "none"`) at 64x64, rendered with shadow maps and
 /// with shadow rays, and traced by the path tracer with no bounces through the pixel centres
 /// (one path per pixel is exact: a point light, no randomness left). The fraction of pixels
@@ -315,6 +365,19 @@ fn shadow_rays_give_the_path_tracers_direct_light_in_every_schedule_mode() {
         assert!(names.iter().any(|n| n == "rt shadows") && !names.iter().any(|n| n == "shadow maps"), "{names:?}");
     }
     drop(r);
+    // With voxel GI the maps still light the voxels, but only on the frames that relight them
+    // (here only the first: `gi.update_interval = 0`).
+    let mut vct = common::load(&repo().join("scenes/cornell-box.toml"), &size[..2]);
+    (vct.settings.gi.shadows, vct.settings.gi.voxel_resolution) = (DirectShadows::Rt, 32);
+    vct.settings.gi.update_interval = 0;
+    let mut r = Renderer::new(&ctx, vct).unwrap();
+    let mut maps_per_frame = Vec::new();
+    for _ in 0..3 {
+        r.render(t, false).unwrap();
+        maps_per_frame.push(r.last_pass_names().iter().any(|n| n == "shadow maps"));
+    }
+    drop(r);
+    assert_eq!(maps_per_frame, [true, false, false], "frames that render the shadow maps");
     assert_no_validation_messages(&ctx);
 }
 

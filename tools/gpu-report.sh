@@ -18,7 +18,9 @@
 #                          and dense, sync, 1920x1080; info-layouts.txt: their memory
 #   bench-reflect-*       the reflections (issue 28): the mirror and glossy Cornell boxes with the
 #                          specular cone and with ray-traced reflections (gi.specular = "rt"),
-#                          sync and async; a device without ray queries records the refusal
+#                          sync and async; a device without ray queries records the refusal;
+#                          bench-shadows-{cornell-box,crytek-sponza}-{shadow-map,rt}: the direct light's
+#                          shadow maps against shadow rays (gi.shadows = "rt"), sync and async
 #   sweep-cornell/         a short speed/accuracy sweep against the path-traced reference, with
 #                          rows for rsm, lpv and rsm+lpv on the same frontier
 #   serial-*.json/.txt     the serial profile (every pass submitted alone and host-timed)
@@ -194,7 +196,6 @@ want bench && for run in "cornell static cornell-box" "cornell dynamic dynamic-s
       --json "$out/bench-$tag.json" --timeline "$out/bench-$tag.svg" >"$out/bench-$tag.txt" 2>&1
   done
 done
-
 # ----- 3a. The voxel layouts (issue 27): bricks against dense, same resolution, same run. -----
 if [ "$quick" = 1 ]; then layout_res=(16 32); else layout_res=(128 256 512); fi
 want layouts && for v in "${layout_res[@]}"; do
@@ -218,13 +219,20 @@ want techniques && for run in "cornell cornell-box" "sponza sponza"; do
       --json "$out/bench-$tag.json" --timeline "$out/bench-$tag.svg" >"$out/bench-$tag.txt" 2>&1
   done
 done
-
 # ----- 3c. Reflections (issue 28): the specular cone against ray-traced reflections. -----
 want reflections && for scene in cornell-mirror cornell-glossy; do
   for spec in cone rt; do
     tag="reflect-$scene-$spec"
     step "bench-$tag" 300 "$bin/bench" --scene "scenes/$scene.toml" --modes sync,async --width "$w" --height "$h" \
       --set "gi.specular=\"$spec\"" --frames "$frames" --warmup "$warmup" \
+      --json "$out/bench-$tag.json" --timeline "$out/bench-$tag.svg" >"$out/bench-$tag.txt" 2>&1
+  done
+done
+want reflections && for scene in cornell-box crytek-sponza; do
+  for shadows in shadow-map rt; do
+    tag="shadows-$scene-$shadows"
+    step "bench-$tag" 300 "$bin/bench" --scene "scenes/$scene.toml" --modes sync,async --width "$w" --height "$h" \
+      --set "gi.shadows=\"$shadows\"" --frames "$frames" --warmup "$warmup" \
       --json "$out/bench-$tag.json" --timeline "$out/bench-$tag.svg" >"$out/bench-$tag.txt" 2>&1
   done
 done

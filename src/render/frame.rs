@@ -475,6 +475,8 @@ pub struct FramePasses {
     pub voxels: Option<VoxelPasses>,
     /// Only when some light casts shadows that are resolved with shadow maps.
     pub shadow: Option<ShadowPass>,
+    /// The direct light samples the shadow maps (every frame); else only voxel lighting does.
+    pub direct_shadow_maps: bool,
     pub gbuffer: GBufferPass,
     /// Only where rays are traced (`gi.specular` or `gi.shadows` = "rt").
     pub rays: Option<RayPasses>,
@@ -579,6 +581,7 @@ impl FramePasses {
             upload: frame_upload(frame, scene_gpu, rays.as_ref()),
             voxels,
             shadow,
+            direct_shadow_maps: direct_shadow_maps(scene),
             gbuffer: GBufferPass::new(ctx, scene_gpu, frame, &gbuffer)?,
             targets: [&gbuffer.depth, &gbuffer.albedo, &gbuffer.normal, &gbuffer.specular, &gbuffer.emission]
                 .into_iter()
@@ -682,7 +685,7 @@ impl FramePasses {
             Shading::VoxelView(view) => view.shows_radiance(),
         };
         let relight = lit_voxels && (state.relight || !state.static_voxelized);
-        let direct_needs_shadow_maps = matches!(&self.shading, Shading::Lighting(_));
+        let direct_needs_shadow_maps = self.direct_shadow_maps && matches!(&self.shading, Shading::Lighting(_));
         if let Some(shadow) = &self.shadow {
             if relight || direct_needs_shadow_maps {
                 passes.push(shadow);
@@ -807,13 +810,18 @@ fn refuse_rays_without_queries(ctx: &Context, s: &RenderSettings) -> GpuResult<(
 pub fn shadow_map_views(scene: &Scene) -> u32 {
     let s = &scene.settings;
     let voxel_lighting = s.gi.mode == GiMode::Vct || matches!(s.view, View::VoxelRadiance | View::VoxelMip);
-    let direct_maps = !(cone_shadows(scene) || rt_shadows(scene)) || scene.lights.len() > 4;
     let voxel_maps = voxel_lighting && s.gi.occlusion == VoxelOcclusion::ShadowMap;
-    if direct_maps || voxel_maps {
+    if direct_shadow_maps(scene) || voxel_maps {
         crate::render::lights::shadow_view_count(scene)
     } else {
         0
     }
+}
+
+/// The direct light samples shadow maps: unless cones or rays shadow every light (they take
+/// the first four).
+fn direct_shadow_maps(scene: &Scene) -> bool {
+    !(cone_shadows(scene) || rt_shadows(scene)) || scene.lights.len() > 4
 }
 
 /// Direct light is shadowed by cones (`gi.shadows = "cone"`, cones traced per pixel).

@@ -111,6 +111,23 @@ impl SceneRays {
         accel::instance_bytes(&records)
     }
 
+    /// The bindings a ray-query shader declares in a row (glsl/include/ray_query.glsl): the top
+    /// level, the vertices, indices, draw table and instances, the materials, the textures and
+    /// their explicit-level sampler.
+    pub fn binds<'a>(&'a self, scene: &'a SceneGpu) -> [Bind<'a>; 8] {
+        let [materials, textures] = scene.materials.binds();
+        [
+            Bind::AccelerationStructure(self.top.structure.raw),
+            Bind::Storage(&scene.vertices),
+            Bind::Storage(&scene.indices),
+            Bind::Storage(&self.draws),
+            Bind::Storage(&scene.instances),
+            materials,
+            textures,
+            scene.materials.lod_sampler_bind(),
+        ]
+    }
+
     /// Uploads the instances and builds the top level at load time.
     fn build_now(&self, ctx: &Arc<Context>, instances: &[u8]) -> GpuResult<()> {
         ctx.one_shot("build scene top level", |cmd| unsafe {
@@ -234,8 +251,7 @@ impl RtReflectPass {
         let RtImages { target, history, lod0 } = images;
         let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let [pool_images, pool_sampler] = v.pool_binds();
-        let [materials, textures] = scene.materials.binds();
-        vec![
+        [
             Bind::Uniform(&frame.uniforms),
             Bind::Storage(&frame.lights),
             Bind::Uniform(&v.grid_buffer),
@@ -250,17 +266,11 @@ impl RtReflectPass {
             pool_images,
             pool_sampler,
             Bind::StorageImage(target.view),
-            Bind::AccelerationStructure(rays.top.structure.raw),
-            Bind::Storage(&scene.vertices),
-            Bind::Storage(&scene.indices),
-            Bind::Storage(&rays.draws),
-            Bind::Storage(&scene.instances),
-            materials,
-            textures,
-            scene.materials.lod_sampler_bind(),
-            Bind::Sampled(v.radiance.view, v.sampler.raw, ro),
-            Bind::StorageImage(history.view),
         ]
+        .into_iter()
+        .chain(rays.binds(scene))
+        .chain([Bind::Sampled(v.radiance.view, v.sampler.raw, ro), Bind::StorageImage(history.view)])
+        .collect()
     }
 }
 

@@ -38,23 +38,17 @@ impl RtShadowPass {
         let visibility = Arc::new(Image::new(ctx, "rt shadow visibility", desc)?);
         let sampler = GBuffer::sampler(ctx)?;
         let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        let [materials, textures] = scene.materials.binds();
-        let binds = [
+        let binds: Vec<Bind> = [
             Bind::Uniform(&frame.uniforms),
             Bind::Storage(&frame.lights),
             Bind::Sampled(gbuffer.depth.view, sampler.raw, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL),
             Bind::Sampled(gbuffer.albedo.view, sampler.raw, ro),
             Bind::Sampled(gbuffer.specular.view, sampler.raw, ro),
             Bind::StorageImage(visibility.view),
-            Bind::AccelerationStructure(rays.top.structure.raw),
-            Bind::Storage(&scene.vertices),
-            Bind::Storage(&scene.indices),
-            Bind::Storage(&rays.draws),
-            Bind::Storage(&scene.instances),
-            materials,
-            textures,
-            scene.materials.lod_sampler_bind(),
-        ];
+        ]
+        .into_iter()
+        .chain(rays.binds(scene))
+        .collect();
         let set = DescriptorSet::new(ctx, "rt shadows", vk::ShaderStageFlags::COMPUTE, &binds)?;
         let spec = [(0, scene.materials.texture_count())];
         let pipeline = Pipeline::compute(ctx, "rt shadows", shaders::RT_SHADOW_COMP, &[set.layout], 0, &spec)?;
