@@ -492,7 +492,8 @@ pub struct FramePasses {
     pub tonemap: TonemapPass,
     /// Created on the first frame whose output is read back (not for benchmarks).
     pub readback: Option<ReadbackPasses>,
-    /// The frame's 2D targets: G-buffer, shadow maps (or their placeholder), radiance, display.
+    /// The frame's 2D targets: G-buffer, shadow maps (or their placeholder), radiance, display,
+    /// and the ray-traced shadows' visibility where it exists.
     pub targets: Vec<Arc<Image>>,
 }
 
