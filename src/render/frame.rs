@@ -833,8 +833,11 @@ pub fn cone_shadows(scene: &Scene) -> bool {
         && matches!(s.view, View::Final | View::Indirect | View::Ao)
 }
 
-/// Direct light is shadowed by rays (`gi.shadows = "rt"`, a shadow ray per pixel and light).
+/// Direct light is shadowed by rays (`gi.shadows = "rt"`, a shadow ray per pixel and light):
+/// only in the final image (the only view that shows direct light) and where one of the first
+/// four lights casts shadows.
 pub fn rt_shadows(scene: &Scene) -> bool {
     let s = &scene.settings;
-    s.gi.shadows == DirectShadows::Rt && matches!(s.view, View::Final | View::Indirect | View::Ao)
+    let shadowed = scene.lights.iter().take(4).any(|l| l.cast_shadows);
+    s.gi.shadows == DirectShadows::Rt && s.view == View::Final && shadowed
 }

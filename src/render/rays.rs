@@ -128,6 +128,15 @@ impl SceneRays {
         ]
     }
 
+    /// What a ray-query pass reads that changes from frame to frame: the top level (rebuilt
+    /// when objects move) and the instances (their hits' transforms).
+    pub fn reads<'a>(&'a self, scene: &'a SceneGpu) -> [Use<'a>; 2] {
+        [
+            Use::buffer(&self.top.structure.buffer, Access::ComputeShaderReadAccelerationStructure),
+            Use::buffer(&scene.instances, Access::ComputeShaderReadBuffer),
+        ]
+    }
+
     /// Uploads the instances and builds the top level at load time.
     fn build_now(&self, ctx: &Arc<Context>, instances: &[u8]) -> GpuResult<()> {
         ctx.one_shot("build scene top level", |cmd| unsafe {
@@ -297,8 +306,7 @@ impl Pass for RtReflectPass {
         }
         uses.push(Use::overwrite(&self.target, Access::ComputeShaderWrite));
         uses.push(Use::image(&self.history, Access::ComputeShaderWrite));
-        uses.push(Use::buffer(&self.rays.top.structure.buffer, Access::ComputeShaderReadAccelerationStructure));
-        uses.push(Use::buffer(&self.scene.instances, Access::ComputeShaderReadBuffer));
+        uses.extend(self.rays.reads(&self.scene));
         uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
         uses
     }

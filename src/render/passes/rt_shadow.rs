@@ -76,9 +76,8 @@ impl Pass for RtShadowPass {
             Use::image(&g.albedo, Access::ComputeShaderReadSampled),
             Use::image(&g.specular, Access::ComputeShaderReadSampled),
             Use::overwrite(&self.visibility, Access::ComputeShaderWrite),
-            Use::buffer(&self.rays.top.structure.buffer, Access::ComputeShaderReadAccelerationStructure),
-            Use::buffer(&self.scene.instances, Access::ComputeShaderReadBuffer),
         ];
+        uses.extend(self.rays.reads(&self.scene));
         uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
         uses
     }
