@@ -1,9 +1,11 @@
 #version 460
 // Voxelization: each fragment is one voxel column along the dominant axis. Every voxel of the
 // column within the triangle's depth range over the pixel square is tested exactly against
-// the triangle (separating axes) and, if touched, receives a running average of linear
-// albedo, normal and emission (atomic compare-and-swap on R32_UINT). The invocation that
-// gives a voxel its first albedo sample appends the voxel to the work list. Textures and
+// the triangle (separating axes) and, if touched, receives a sample of linear albedo, normal
+// and emission, added to its sums (voxel.glsl: integer atomics, so the result does not depend
+// on the order fragments arrive in); voxel_resolve.comp turns the sums into averages. In the
+// dynamic pass the invocation that gives a voxel its first sample appends the voxel to the
+// work list (the static list is built in grid order by voxel_resolve.comp). Textures and
 // normals are sampled over the part of the pixel's square that the triangle covers: at its
 // centroid, with the texture-coordinate gradient over its extent, so at the mip level of that
 // footprint. (Interpolated attributes would not do: a conservative fragment's centre can lie
@@ -18,7 +20,7 @@
 #include "scene.glsl"
 #include "material.glsl"
 #include "voxel.glsl"
-#define VOXEL_LIST_BINDING 9
+#define VOXEL_LIST_BINDING 6
 #define VOXEL_LIST_APPEND_ONLY
 #include "voxel_list.glsl"
 
@@ -29,13 +31,12 @@ layout(constant_id = 4) const bool MARK = false;
 
 layout(set = 0, binding = 2, std430) readonly buffer Materials { Material materials[]; };
 layout(set = 0, binding = 3) uniform texture2D textures[TEXTURE_COUNT];
-layout(set = 0, binding = 10) uniform sampler texture_sampler;
+layout(set = 0, binding = 7) uniform sampler texture_sampler;
 layout(set = 0, binding = 4) uniform GridBlock { VoxelGrid grid; };
-layout(set = 0, binding = 5, r32ui) uniform coherent uimage3D vox_albedo;
-layout(set = 0, binding = 6, r32ui) uniform coherent uimage3D vox_normal;
-layout(set = 0, binding = 7, r32ui) uniform coherent uimage3D vox_emission;
-layout(set = 0, binding = 8, r8ui) uniform uimage3D vox_flags;
-layout(set = 0, binding = 11, r32ui) uniform uimage3D brick_maps[4];
+layout(set = 0, binding = 5, r8ui) uniform uimage3D vox_flags;
+layout(set = 0, binding = 8, r32ui) uniform uimage3D brick_maps[4];
+// The sums (voxel.glsl), SUM_WORDS volumes; the emission's are placeholders without emission.
+layout(set = 0, binding = 9, r32ui) uniform uimage3D vox_sums[SUM_WORDS];
 #define BRICK_MAPS_WRITABLE
 #include "bricks.glsl"
 
@@ -49,9 +50,13 @@ layout(location = 8) flat in vec3 g_t0;
 layout(location = 9) flat in vec3 g_t1;
 layout(location = 10) flat in vec3 g_t2;
 
-DEFINE_ATOMIC_AVERAGE(average_albedo, vox_albedo)
-DEFINE_ATOMIC_AVERAGE(average_normal, vox_normal)
-DEFINE_ATOMIC_AVERAGE(average_emission, vox_emission)
+// Add a sample's three channels to the sums from word `first` on.
+void add_sample(ivec3 t, int first, vec3 value) {
+    uvec3 q = sum_sample(value, grid.dims.w);
+    if (q.x != 0u) imageAtomicAdd(vox_sums[first], t, q.x);
+    if (q.y != 0u) imageAtomicAdd(vox_sums[first + 1], t, q.y);
+    if (q.z != 0u) imageAtomicAdd(vox_sums[first + 2], t, q.z);
+}
 
 // The bricks voxel vc needs: its own full-resolution brick, and on each pooled directional
 // level the brick of the texel over it and the brick whose apron holds that texel.
@@ -210,11 +215,12 @@ void main() {
         // update would average its samples in again and the static voxel would drift toward
         // the dynamic object's albedo and normal until its sample count saturates.
         if (HAS_FLAGS && pc.mark_static == 0u && imageLoad(vox_flags, vt).r != 0u) continue;
-        if (average_albedo(vt, albedo)) list_append(vc);
-        average_normal(vt, nrm * 0.5 + 0.5);
-        if (HAS_EMISSION) {
-            average_emission(vt, emission);  // zeros too: a half-emissive voxel emits half
-        }
+        uint earlier = imageAtomicAdd(vox_sums[SUM_COUNT], vt, 1u);
+        if (earlier == 0u && pc.mark_static == 0u) list_append(vc);
+        add_sample(vt, SUM_ALBEDO, albedo);
+        add_sample(vt, SUM_NORMAL, nrm * 0.5 + 0.5);
+        // Zeros count too (in the count): a half-emissive voxel emits half.
+        if (HAS_EMISSION) add_sample(vt, SUM_EMISSION, emission);
         if (HAS_FLAGS && pc.mark_static != 0u) {
             imageStore(vox_flags, vt, uvec4(1u));
         }

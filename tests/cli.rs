@@ -187,7 +187,12 @@ fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
     );
     let out = stdout(&o);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(out.contains("voxel clear -> voxelize static -> voxel list (static) -> shadow maps"), "{out}");
+    assert!(
+        out.contains("voxel clear -> voxelize static -> voxel resolve static -> voxel list (static) -> shadow maps"),
+        "{out}"
+    );
+    // The voxelization's sums: a count, albedo and normal (no emission), 0.12 MiB each.
+    assert!(out.contains("volume voxel sum normal z: 0.12 MiB") && !out.contains("voxel sum emission"), "{out}");
     assert!(out.contains("volume voxel albedo: 0.12 MiB") && out.contains("volume voxel normal: 0.12 MiB"), "{out}");
     // The work list (bounded by the triangles' boxes, below 32^3 entries = 0.13 MiB) and what
     // the first frame occupied: the box's walls and blocks, all static, a few percent of the grid.
@@ -286,7 +291,8 @@ fn voxel_view_renders() {
     let out = stdout(&o);
     assert!(
         out.contains(
-            "passes: frame data upload -> voxel clear -> voxelize static -> voxel list (static) -> voxel view -> tonemap"
+            "passes: frame data upload -> voxel clear -> voxelize static -> voxel resolve static -> voxel list (static) \
+             -> voxel view -> tonemap"
         ),
         "{out}"
     );

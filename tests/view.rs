@@ -9,8 +9,8 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 /// `dvsgi view` with `args` under `xvfb-run` (a free display, 24-bit screen), validation on
-/// and one llvmpipe thread (so renders repeat byte for byte). `None` without xvfb-run outside
-/// CI (CI installs it: tools/setup.sh).
+/// and 4 llvmpipe threads (renders repeat byte for byte whatever the threads: tests/repeat.rs).
+/// `None` without xvfb-run outside CI (CI installs it: tools/setup.sh).
 fn view(args: &[&str]) -> Option<Output> {
     if Command::new("xvfb-run").arg("--help").output().is_err() {
         assert!(std::env::var_os("CI").is_none(), "xvfb-run is missing: tools/setup.sh installs xvfb");
@@ -19,7 +19,7 @@ fn view(args: &[&str]) -> Option<Output> {
     }
     let mut c = Command::new("xvfb-run");
     c.args(["-a", "-s", "-screen 0 1280x800x24", env!("CARGO_BIN_EXE_dvsgi"), "view"]).args(args);
-    c.current_dir(repo()).env("DVSGI_VALIDATION", "1").env("LP_NUM_THREADS", "1");
+    c.current_dir(repo()).env("DVSGI_VALIDATION", "1").env("LP_NUM_THREADS", "4");
     Some(c.output().expect("run xvfb-run"))
 }
 
@@ -79,7 +79,7 @@ fn a_capture_is_what_render_makes_of_the_scene_file_it_writes() {
         .args(args)
         .current_dir(dir.path())
         .env("DVSGI_VALIDATION", "1")
-        .env("LP_NUM_THREADS", "1")
+        .env("LP_NUM_THREADS", "3")
         .output()
         .unwrap();
     assert!(r.status.success(), "{}", stderr(&r));

@@ -5,7 +5,8 @@
 struct VoxelGrid {
     vec4 origin;     // xyz world position of the grid's min corner, w voxel size (world units)
     uvec4 dims;      // x voxels per side; y directional levels in brick pools (bricks.glsl);
-                     // z 1 when the volumes are bricked, 0 when dense
+                     // z 1 when the volumes are bricked, 0 when dense; w the fixed-point
+                     // one of the voxelization sums (sum_sample below)
     vec4 params;     // x emission scale: voxels store emission / scale in 8 bits;
                      // y radiance scale: radiance volumes hold radiance * y; z = 1/y
     uvec4 pools[4];  // brick pools (render::bricks): xyz slots per axis of the pool image,
@@ -45,24 +46,29 @@ vec4 unpack_rgb_count(uint v) {
     return vec4(float(v & 0xffu), float((v >> 8) & 0xffu), float((v >> 16) & 0xffu), float(v >> 24));
 }
 
-// Running average of `value` (components in [0,1]) into voxel `c` of the r32ui image IMG
-// by compare-and-swap; the count saturates at 255 samples. Returns true for the one
-// invocation that found the voxel empty (its first sample), which appends it to a work list.
-#define DEFINE_ATOMIC_AVERAGE(NAME, IMG)                                                    \
-    bool NAME(ivec3 c, vec3 value) {                                                        \
-        vec3 v255 = clamp(value, 0.0, 1.0) * 255.0;                                         \
-        uint desired = pack_rgb_count(v255, 1.0);                                           \
-        uint expected = 0u;                                                                 \
-        for (int i = 0; i < 256; ++i) {                                                     \
-            uint found = imageAtomicCompSwap(IMG, c, expected, desired);                    \
-            if (found == expected) return i == 0;                                           \
-            expected = found;                                                               \
-            vec4 cur = unpack_rgb_count(found);                                             \
-            if (cur.a >= 255.0) break;                                                      \
-            desired = pack_rgb_count((cur.rgb * cur.a + v255) / (cur.a + 1.0), cur.a + 1.0); \
-        }                                                                                   \
-        return false;                                                                       \
-    }
+// Order-independent voxelization. Every sample a voxel receives (one per triangle whose
+// fragment column touches it) is added, as integers, to the voxel's sums: a count, and each
+// attribute channel clamped to [0,1] in fixed point with grid.dims.w steps. Integer
+// additions commute, so the sums, and the averages voxel_resolve.comp makes of them, do not
+// depend on the order fragments arrive in. grid.dims.w is chosen (render::voxel::sum_scale)
+// so that no sum can overflow: a voxel receives at most one sample per drawn triangle.
+// The sums are R32_UINT volumes of the full-resolution extent (pool 0 with bricks), one per
+// word: SUM_COUNT, then three per attribute (SUM_ALBEDO, SUM_NORMAL, SUM_EMISSION).
+const int SUM_COUNT = 0;
+const int SUM_ALBEDO = 1;
+const int SUM_NORMAL = 4;
+const int SUM_EMISSION = 7;
+const int SUM_WORDS = 10;  // with emission; 7 without
+
+// A sample's channels in fixed point: what voxelize.frag adds to the sums.
+uvec3 sum_sample(vec3 value, uint one) {
+    return uvec3(round(clamp(value, 0.0, 1.0) * float(one)));
+}
+
+// The mean of `count` samples whose fixed-point channels add up to `sum`, in [0,1].
+vec3 sum_mean(uvec3 sum, uint count, uint one) {
+    return vec3(sum) / (float(count) * float(one));
+}
 
 // Separating-axis test of a triangle (grid coordinates) against the axis-aligned box
 // centre c, half size h. Touching counts as overlapping (conservative).

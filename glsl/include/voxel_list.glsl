@@ -1,7 +1,9 @@
-// Work lists of occupied voxels (mirrors render::voxel::VoxelList). Voxelization appends a
-// voxel when it is the first to write the voxel's albedo, so the list holds every occupied
-// voxel exactly once: the static voxels first (entries [0, static_count)), then the dynamic
-// ones of the last revoxelization ([static_count, occupied)). The voxel passes dispatch
+// Work lists of occupied voxels (mirrors render::voxel::VoxelList). The list holds every
+// occupied voxel exactly once: the static voxels first (entries [0, static_count)), in grid
+// order (voxel_resolve.comp builds them after the static voxelization: 8^3 bricks in grid
+// order, voxels in grid order within a brick, so list positions repeat from run to run), then
+// the dynamic ones of the last revoxelization ([static_count, occupied)), appended by the
+// voxelizer as each one's first sample arrives (their order decides nothing numeric). The voxel passes dispatch
 // indirectly over it (each range's group counts are kept beside it by voxel_list.comp), so
 // they cost what the scene's surfaces hold, not the grid's N^3.
 // The including shader defines VOXEL_LIST_BINDING (and VOXEL_LIST_QUALIFIER, e.g. readonly;

@@ -785,8 +785,9 @@ fn print_scene(common: &CommonArgs, ctx: &std::sync::Arc<Context>, scene: dvsgi:
         let kind = if img.desc.kind == dvsgi::gpu::ImageKind::D3 { "volume" } else { "image" };
         outln!("  {kind} {}: {:.2} MiB", img.name, img.bytes as f64 / (1024.0 * 1024.0));
     }
-    if let Some(list) = renderer.voxels().map(|v| v.list.bytes()) {
-        outln!("  buffer voxel work lists: {:.2} MiB", list as f64 / (1024.0 * 1024.0));
+    if let Some(v) = renderer.voxels() {
+        outln!("  buffer voxel work lists: {:.2} MiB", v.list.bytes() as f64 / (1024.0 * 1024.0));
+        outln!("  buffer voxel scan: {:.2} MiB", v.scan.size as f64 / (1024.0 * 1024.0));
     }
     outln!(
         "  textures: {} with mip chains, {:.2} MiB (anisotropic filtering {}x)",

@@ -205,7 +205,8 @@ impl Estimate {
 /// frame takes at most half of the device-local heap and its largest volume fits one
 /// allocation, bricks otherwise. The two render the same image (tests/voxel.rs); dense is the
 /// faster (1.2-1.7x the frame on an H200 for bricks on Sponza at 128^3-512^3, 1.3-1.5x per voxel
-/// pass on lavapipe: docs/SPARSE.md), bricks the smaller (0.15 of dense at 512^3). Half the heap
+/// pass on lavapipe: docs/SPARSE.md), bricks the smaller (0.15 of dense at 512^3 before the
+/// voxelization's sums, which weigh more on dense). Half the heap
 /// leaves the rest of the device's memory to everything else running on it. Other values are
 /// returned as they are.
 pub fn resolve_layout(scene: &Scene, limits: &Limits) -> VoxelLayout {
@@ -301,6 +302,11 @@ fn voxel_allocations(scene: &Scene, layout: VoxelLayout) -> Vec<Alloc> {
     if needs.emission {
         vols.push(volume(F::R32_UINT, false));
     }
+    // The voxelization's sums (a count, albedo and normal, emission) and the scan over 8^3
+    // bricks that orders the work list.
+    vols.extend(std::iter::repeat_n(volume(F::R32_UINT, false), crate::render::voxel::sum_words(needs.emission)));
+    let sides: Vec<u32> = layout.as_ref().map_or(Vec::new(), |l| l.pools.iter().map(|p| p.map_side).collect());
+    vols.push(Alloc::Buffer(4 * crate::render::voxel::ScanLayout::new(res, &sides).words));
     if needs.dynamic {
         vols.push(volume(F::R8_UINT, false));
     }
@@ -354,19 +360,21 @@ mod tests {
         let e = Estimate::of(&scene);
         // albedo + normal 2 x 2048, radiance 4096, bounced radiance and the bounce's scratch
         // volume 2 x 4096, six directional chains of (64 + 8 + 1) texels x 8 bytes, and the
-        // work list's 64-byte header (no triangles: no entries), and the three 1^3
-        // placeholders (R32_UINT, RGBA16F, R8_UINT).
-        assert_eq!(e.volumes, 2 * 2048 + 4096 + 2 * 4096 + 6 * 73 * 8 + 64 + 4 + 8 + 1);
+        // work list's 64-byte header (no triangles: no entries), the three 1^3 placeholders
+        // (R32_UINT, RGBA16F, R8_UINT), the voxelization's seven sums (a count, albedo and
+        // normal) 7 x 2048 and the scan buffer (a 16-word header and one 8^3 brick).
+        assert_eq!(e.volumes, 2 * 2048 + 4096 + 2 * 4096 + 6 * 73 * 8 + 64 + 4 + 8 + 1 + 7 * 2048 + 4 * 17);
         assert_eq!(e.largest_volume, 4096);
         assert_eq!(e.targets, 100 * 48 + 100 * 8, "G-buffer, radiance, display, diffuse cones");
         scene.settings.gi.mode = GiMode::None;
         assert_eq!(Estimate::of(&scene).volumes, 0);
         // 512^3 with one bounce: albedo, normal 0.5 GiB each, radiance, bounced and scratch
-        // 1 GiB each, directional 6 x 146.3 MiB: 4.86 GiB.
+        // 1 GiB each, directional 6 x 146.3 MiB: 4.86 GiB; and the seven sums the
+        // voxelization adds to, 0.5 GiB each (and a 1 MiB scan): 8.36 GiB.
         scene.settings.gi.mode = GiMode::Vct;
         scene.settings.gi.voxel_resolution = 512;
         let v = Estimate::of(&scene).volumes as f64 / (1u64 << 30) as f64;
-        assert!((v - 4.857).abs() < 0.01, "{v} GiB");
+        assert!((v - 8.358).abs() < 0.01, "{v} GiB");
         // Bricked, an empty scene holds one slot per pool (the pools' minimum), the maps
         // (64^3 + 33^3 + 17^3 entries at 512^3), the lists and the dense directional levels
         // of at most 64^3: a few MiB.
@@ -387,7 +395,7 @@ mod tests {
         let err = e.check_limits(&scene, &lim(2 << 30, 2 << 30)).unwrap_err().to_string();
         for part in [
             "test:",
-            "about 4974 MiB",
+            "about 8559 MiB",
             "voxel volumes, dense",
             "512^3",
             "llvmpipe's largest device-local memory heap (2048 MiB)",

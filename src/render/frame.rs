@@ -19,6 +19,7 @@ use super::passes::voxel_clear::{DynamicClearPass, VoxelClearPass};
 use super::passes::voxel_light::VoxelLightPass;
 use super::passes::voxel_list::{ListKeeper, ListStep, VoxelListPass};
 use super::passes::voxel_mips::{VoxelMipPass, VoxelMips};
+use super::passes::voxel_resolve::VoxelResolvePass;
 use super::passes::voxel_view::{VoxelMipViewPass, VoxelViewPass};
 use super::passes::voxelize::{VoxelizePass, Voxelizer};
 use super::rays::{missing_ray_queries, RtReflectPass, SceneRays, TopLevelBuildPass};
@@ -37,6 +38,8 @@ pub struct VoxelPasses {
     /// With bricked volumes: the bricks static geometry needs, made resident.
     pub bricks_static: Option<BrickPasses>,
     pub voxelize_static: VoxelizePass,
+    /// The static voxels' sums made averages; builds the work list in grid order.
+    pub resolve_static: VoxelResolvePass,
     /// Closes the work list of occupied voxels after static voxelization.
     pub list_static: VoxelListPass,
     /// Only with dynamic objects.
@@ -67,6 +70,7 @@ impl VoxelPasses {
                 bricks: BrickPasses::new(ctx, &voxelizer, &volumes, true)?,
                 voxelize: VoxelizePass::new(&voxelizer, true),
                 list: VoxelListPass::new(&keeper, ListStep::Dynamic),
+                resolve: VoxelResolvePass::new(ctx, &volumes, true)?,
             })
         } else {
             None
@@ -93,6 +97,7 @@ impl VoxelPasses {
             clear: VoxelClearPass::new(&volumes),
             bricks_static: BrickPasses::new(ctx, &voxelizer, &volumes, false)?,
             voxelize_static: VoxelizePass::new(&voxelizer, false),
+            resolve_static: VoxelResolvePass::new(ctx, &volumes, false)?,
             list_static: VoxelListPass::new(&keeper, ListStep::Static),
             dynamic,
             mips,
@@ -103,13 +108,14 @@ impl VoxelPasses {
 }
 
 /// Revoxelizing the dynamic objects: empty their voxels (the list's dynamic range), voxelize
-/// them again, close the list.
+/// them again, close the list, resolve their sums.
 pub struct DynamicPasses {
     pub clear: DynamicClearPass,
     /// With bricked volumes: bricks the objects reach anew, made resident.
     pub bricks: Option<BrickPasses>,
     pub voxelize: VoxelizePass,
     pub list: VoxelListPass,
+    pub resolve: VoxelResolvePass,
 }
 
 /// Making bricks resident before a voxelization: the marking run over the same geometry, then
@@ -672,6 +678,7 @@ impl FramePasses {
                 passes.push(&v.clear);
                 BrickPasses::push(&v.bricks_static, &mut passes);
                 passes.push(&v.voxelize_static);
+                passes.push(&v.resolve_static);
                 passes.push(&v.list_static);
             }
             if let (true, Some(d)) = (state.revoxelize || !state.static_voxelized, &v.dynamic) {
@@ -679,6 +686,7 @@ impl FramePasses {
                 BrickPasses::push(&d.bricks, &mut passes);
                 passes.push(&d.voxelize);
                 passes.push(&d.list);
+                passes.push(&d.resolve);
             }
         }
         let lit_voxels = match &self.shading {

@@ -125,6 +125,16 @@ pub struct VoxelVolumes {
     pub diffuse_rays: u32,
     /// The work list of occupied voxels the voxel passes dispatch over.
     pub list: VoxelList,
+    /// The voxelization's sums (voxel.glsl): R32_UINT volumes of the full-resolution extent,
+    /// a count and three channels each of albedo, normal and (with emission) emission; zero
+    /// between voxelizations (the resolve zeroes what it reads).
+    pub sums: Vec<Arc<Image>>,
+    /// The fixed-point one of the sums ([`sum_scale`]).
+    pub sum_scale: u32,
+    /// Counts made offsets by glsl/scan.comp ([`ScanLayout`]): per 8^3 brick of the grid its
+    /// occupied voxels, then their offsets in the work list (glsl/voxel_resolve.comp); with
+    /// bricks, per block of each pool's map its pending bricks, then their first slot.
+    pub scan: Arc<Buffer>,
     /// With `gi.voxel_layout = "bricks"`: the maps, pools and lists of resident bricks. The
     /// full-resolution volumes above are then pools of bricks, and `directional` holds only
     /// the dense levels (those of at most 64^3 texels).
@@ -204,6 +214,79 @@ pub fn list_capacity(scene: &Scene, grid: &VoxelGrid) -> u64 {
     total
 }
 
+/// The fixed-point one of the voxelization's sums (`grid.dims.w`, glsl/include/voxel.glsl):
+/// as fine as 16 bits, but no finer than lets a voxel add one sample of 1.0 per triangle the
+/// scene draws without its 32-bit sum overflowing (a voxel receives at most one sample per
+/// triangle and pass: one fragment per pixel column). At least 255 (8 bits, what the averages
+/// keep), which could overflow only past 16.8 million triangles meeting in one voxel.
+pub fn sum_scale(scene: &Scene) -> u32 {
+    let triangles: u64 = scene
+        .objects
+        .iter()
+        .flat_map(|o| o.meshes.iter().filter_map(|&i| scene.meshes.get(i as usize)))
+        .map(|m| m.indices.len() as u64 / 3)
+        .sum();
+    (u64::from(u32::MAX) / triangles.max(1)).clamp(255, 65535) as u32
+}
+
+/// What each volume of sums holds (`SUM_COUNT`, `SUM_ALBEDO`... in glsl/include/voxel.glsl).
+const SUM_NAMES: [&str; 10] = [
+    "count",
+    "albedo r",
+    "albedo g",
+    "albedo b",
+    "normal x",
+    "normal y",
+    "normal z",
+    "emission r",
+    "emission g",
+    "emission b",
+];
+
+/// Volumes of sums the voxelization adds to: a count, albedo and normal (three channels
+/// each), and with emission three more.
+pub fn sum_words(emission: bool) -> usize {
+    if emission {
+        10
+    } else {
+        7
+    }
+}
+
+/// Bricks of 8^3 in a grid of `resolution` (the voxel scan's granularity).
+pub fn scan_bricks(resolution: u32) -> u64 {
+    u64::from(resolution.div_ceil(8)).pow(3)
+}
+
+/// The scan buffer's layout (glsl/include/scan_buffer.glsl), in words: a 16-word header of
+/// totals, one word per 8^3 brick of the grid, then for each pool of bricks one word per block
+/// of 512 map entries (`pools`: the pools' map sides).
+pub struct ScanLayout {
+    /// Per pool: its first word and its blocks.
+    pub pools: Vec<(u32, u32)>,
+    pub words: u64,
+}
+
+/// Words before the voxel counts, and the header word of pool p's total.
+pub const SCAN_VOXELS: u32 = 16;
+pub const SCAN_POOL_TOTAL: u32 = 4;
+
+impl ScanLayout {
+    pub fn new(resolution: u32, map_sides: &[u32]) -> ScanLayout {
+        let mut next = u64::from(SCAN_VOXELS) + scan_bricks(resolution);
+        let pools = map_sides
+            .iter()
+            .map(|&side| {
+                let blocks = u64::from(side).pow(3).div_ceil(512);
+                let pool = (next as u32, blocks as u32);
+                next += blocks;
+                pool
+            })
+            .collect();
+        ScanLayout { pools, words: next }
+    }
+}
+
 /// The side (object units times `scale`) of a cube that holds triangle `p` however it is
 /// rotated and scaled by up to `scale`: as wide as the enclosing sphere of the triangle,
 /// 2/sqrt(3) of its longest edge.
@@ -279,6 +362,7 @@ impl VoxelVolumes {
             Vec::new()
         };
         let (gi_params, bounce_params) = gi_uniforms(ctx, scene, &grid, mip_levels)?;
+        let sum_scale = sum_scale(scene);
         let emission_scale = scene.materials.iter().map(|m| m.emission.max_element()).fold(0.0f32, f32::max).max(1e-6);
         let radiance_scale = crate::render::lights::radiance_scale(scene);
         let grid_buffer = Buffer::uniform(
@@ -286,11 +370,15 @@ impl VoxelVolumes {
             "voxel grid",
             &GpuVoxelGrid {
                 origin: [grid.origin.x, grid.origin.y, grid.origin.z, grid.voxel_size],
-                dims: [res, pooled, u32::from(bricks.is_some()), 0],
+                dims: [res, pooled, u32::from(bricks.is_some()), sum_scale],
                 params: [emission_scale, radiance_scale, 1.0 / radiance_scale, 0.0],
                 pools: pool_uniforms(bricks.as_ref()),
             },
         )?;
+        let sums = SUM_NAMES[..sum_words(needs.emission)]
+            .iter()
+            .map(|w| volume(&format!("voxel sum {w}"), vk::Format::R32_UINT, usage))
+            .collect::<GpuResult<Vec<_>>>()?;
         let placeholder = |name: &str, format, usage| {
             Image::new(ctx, name, ImageDesc::d3(format, 1, 1, usage | vk::ImageUsageFlags::TRANSFER_DST)).map(Arc::new)
         };
@@ -315,6 +403,9 @@ impl VoxelVolumes {
             radiance_scale,
             diffuse_rays: scene.settings.gi.diffuse_rays,
             list: VoxelList::new(ctx, list_capacity(scene, &grid), needs.dynamic)?,
+            sums,
+            sum_scale,
+            scan: scan_buffer(ctx, res, bricks.as_ref())?,
             bricks,
             map_placeholder: placeholder("voxel brick map placeholder", vk::Format::R32_UINT, usage)?,
             pool_placeholder: placeholder("voxel brick pool placeholder", RADIANCE_VOLUME_FORMAT, sampled)?,
@@ -386,6 +477,7 @@ impl VoxelVolumes {
         v.extend(self.flags.as_ref());
         v.push(&self.radiance);
         v.extend(self.bounced.iter());
+        v.extend(self.sums.iter());
         v
     }
 
@@ -395,28 +487,33 @@ impl VoxelVolumes {
         self.bounced.first().unwrap_or(&self.radiance)
     }
 
-    /// Uses of the averaged volumes (albedo, normal, emission) by a pass that writes them with
-    /// `access`, keeping their contents, plus the flag volume (or its placeholder) with `flags`.
+    /// Uses of the voxelization's sums by a pass that adds to them with `access`, keeping
+    /// their contents, plus the flag volume (or its placeholder) with `flags`.
     pub fn uses(&self, access: Access, flags: Access) -> Vec<Use<'_>> {
-        let mut uses = vec![
-            Use::image(&self.albedo, access),
-            Use::image(&self.normal, access),
-            Use::image(self.flags_or_placeholder(), flags),
-        ];
-        uses.extend(self.emission.as_ref().map(|e| Use::image(e, access)));
+        let mut uses = self.sums_uses(access);
+        uses.push(Use::image(self.flags_or_placeholder(), flags));
         uses
     }
 
-    /// Grid uniform, albedo, normal, emission (or albedo), flags (or placeholder): the
-    /// voxelizer's bindings of the averaged volumes, in this order.
-    pub fn binds(&self) -> [Bind<'_>; 5] {
-        [
-            Bind::Uniform(&self.grid_buffer),
-            Bind::StorageImage(self.albedo.view),
-            Bind::StorageImage(self.normal.view),
-            Bind::StorageImage(self.emission_or_albedo().view),
-            Bind::StorageImage(self.flags_or_placeholder().view),
-        ]
+    /// The sums (`vox_sums[SUM_WORDS]` in voxel.glsl): the emission's are the map
+    /// placeholder where there is no emission (never written).
+    pub fn sums_bind(&self) -> Bind<'_> {
+        let view = |w: usize| self.sums.get(w).unwrap_or(&self.map_placeholder).view;
+        Bind::StorageImageArray((0..sum_words(true)).map(view).collect())
+    }
+
+    /// Uses of the bound sums (the placeholder once, where it stands in) with `access`.
+    pub fn sums_uses(&self, access: Access) -> Vec<Use<'_>> {
+        let mut uses: Vec<Use> = self.sums.iter().map(|s| Use::image(s, access)).collect();
+        if self.sums.len() < sum_words(true) {
+            uses.push(Use::image(&self.map_placeholder, access));
+        }
+        uses
+    }
+
+    /// Grid uniform, flags (or placeholder): the voxelizer's bindings of the volumes it reads.
+    pub fn binds(&self) -> [Bind<'_>; 2] {
+        [Bind::Uniform(&self.grid_buffer), Bind::StorageImage(self.flags_or_placeholder().view)]
     }
 
     /// The volume bound where the emission volume goes (albedo stands in, never written).
@@ -581,6 +678,14 @@ fn directional_volumes(
             Image::new(ctx, &format!("voxel radiance {d}"), desc).map(Arc::new)
         })
         .collect()
+}
+
+/// The scan buffer ([`ScanLayout`]) for a grid of `res` and its pools of bricks, if any.
+fn scan_buffer(ctx: &Arc<Context>, res: u32, bricks: Option<&Bricks>) -> GpuResult<Arc<Buffer>> {
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+    let sides: Vec<u32> = bricks.map_or(Vec::new(), |b| b.layout.pools.iter().map(|p| p.map_side).collect());
+    let bytes = 4 * ScanLayout::new(res, &sides).words;
+    Buffer::new(ctx, "voxel scan", bytes, usage, gpu_allocator::MemoryLocation::GpuOnly).map(Arc::new)
 }
 
 /// The cone-tracing parameters of the per-pixel tracer and of the bounce (`gi.bounce_cones`,

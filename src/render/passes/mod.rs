@@ -17,6 +17,7 @@ pub mod voxel_clear;
 pub mod voxel_light;
 pub mod voxel_list;
 pub mod voxel_mips;
+pub mod voxel_resolve;
 pub mod voxel_view;
 pub mod voxelize;
 

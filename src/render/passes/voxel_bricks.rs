@@ -7,9 +7,10 @@
 //! The pools are sized for the static bricks plus what the moving objects can touch at once
 //! (render::bricks::capacity).
 
+use super::voxel_resolve::Scan;
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Pipeline};
 use crate::render::graph::{Pass, Use};
-use crate::render::voxel::VoxelVolumes;
+use crate::render::voxel::{ScanLayout, VoxelVolumes, SCAN_POOL_TOTAL};
 use ash::vk;
 use std::sync::Arc;
 
@@ -20,6 +21,7 @@ enum Mode {
     Finalize = 1,
     Release = 2,
     Restart = 3,
+    Count = 4,
 }
 
 /// A brick_alloc.comp pipeline for `pool` in `mode` (`after_static`: the finalize step after
@@ -29,20 +31,22 @@ fn alloc_pipeline(
     set: &DescriptorSet,
     pool: u32,
     mode: Mode,
-    after_static: bool,
+    (after_static, scan_first): (bool, u32),
 ) -> GpuResult<Pipeline> {
     let name = match mode {
+        Mode::Count => format!("voxel brick count {pool}"),
         Mode::Allocate => format!("voxel brick allocation {pool}"),
         Mode::Finalize => "voxel brick lists".to_string(),
         Mode::Release => format!("voxel brick release {pool}"),
         Mode::Restart => "voxel brick restart".to_string(),
     };
-    let spec = [(0, pool), (1, mode as u32), (2, u32::from(after_static))];
+    let spec = [(0, pool), (1, mode as u32), (2, u32::from(after_static)), (3, scan_first)];
     Pipeline::compute(ctx, &name, shaders::BRICK_ALLOC_COMP, &[set.layout], 0, &spec)
 }
 
 /// A step of brick_alloc.comp over the maps and lists: one dispatch per pool over its map
-/// (`per_pool`), a barrier, then one invocation (`then`). Allocation: allocate, then write the
+/// (`per_pool`), a barrier, then one invocation (`then`). Allocation: count the pending bricks
+/// of each block of the map, scan the counts, allocate in grid order, then write the
 /// dispatches (`BrickListPass::allocate`); release: release, then restart the lists
 /// (`BrickListPass::release`).
 pub struct BrickListPass {
@@ -51,6 +55,9 @@ pub struct BrickListPass {
     then: Pipeline,
     set: DescriptorSet,
     name: &'static str,
+    /// Allocation only: per pool the counting pipeline and its run of the scan buffer
+    /// (first word, blocks), and the scan.
+    counting: Option<(Vec<(Pipeline, (u32, u32))>, Scan)>,
 }
 
 impl BrickListPass {
@@ -71,17 +78,33 @@ impl BrickListPass {
     fn new(
         ctx: &Arc<Context>,
         volumes: &Arc<VoxelVolumes>,
-        (per_pool, then, after_static): (Mode, Mode, bool),
+        (per_pool_mode, then, after_static): (Mode, Mode, bool),
         name: &'static str,
     ) -> GpuResult<Option<Self>> {
         let Some(bricks) = &volumes.bricks else { return Ok(None) };
-        let binds = [Bind::Uniform(&volumes.grid_buffer), volumes.brick_maps_bind(), Bind::Storage(&bricks.lists)];
+        let binds = [
+            Bind::Uniform(&volumes.grid_buffer),
+            volumes.brick_maps_bind(),
+            Bind::Storage(&bricks.lists),
+            Bind::Storage(&volumes.scan),
+        ];
         let set = DescriptorSet::new(ctx, name, vk::ShaderStageFlags::COMPUTE, &binds)?;
-        let per_pool = (0..bricks.layout.pools.len() as u32)
-            .map(|p| alloc_pipeline(ctx, &set, p, per_pool, false))
+        let sides: Vec<u32> = bricks.layout.pools.iter().map(|p| p.map_side).collect();
+        let regions = ScanLayout::new(volumes.grid.resolution, &sides).pools;
+        let per_pool = (0..sides.len() as u32)
+            .map(|p| alloc_pipeline(ctx, &set, p, per_pool_mode, (false, regions[p as usize].0)))
             .collect::<GpuResult<Vec<_>>>()?;
-        let then = alloc_pipeline(ctx, &set, 0, then, after_static)?;
-        Ok(Some(BrickListPass { volumes: volumes.clone(), per_pool, then, set, name }))
+        let then = alloc_pipeline(ctx, &set, 0, then, (after_static, 0))?;
+        // The allocation counts and scans first (`Mode::Count`, then scan.comp).
+        let counting = matches!(per_pool_mode, Mode::Allocate)
+            .then(|| -> GpuResult<_> {
+                let count = (regions.iter().enumerate())
+                    .map(|(p, &r)| Ok((alloc_pipeline(ctx, &set, p as u32, Mode::Count, (false, r.0))?, r)))
+                    .collect::<GpuResult<Vec<_>>>()?;
+                Ok((count, Scan::new(ctx, volumes)?))
+            })
+            .transpose()?;
+        Ok(Some(BrickListPass { volumes: volumes.clone(), per_pool, then, set, name, counting }))
     }
 }
 
@@ -92,15 +115,34 @@ impl Pass for BrickListPass {
     fn uses(&self) -> Vec<Use<'_>> {
         let mut uses = self.volumes.brick_map_uses(Access::ComputeShaderWrite);
         uses.extend(self.volumes.bricks.iter().map(|b| Use::buffer(&b.lists, Access::ComputeShaderWrite)));
+        uses.push(Use::buffer(&self.volumes.scan, Access::ComputeShaderWrite));
         uses
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let b = self.volumes.bricks.as_ref().expect("a brick list pass has bricks");
-        for (pipeline, pool) in self.per_pool.iter().zip(&b.layout.pools) {
-            pipeline.bind(cmd, &[self.set.set]);
-            pipeline.dispatch(cmd, [pool.map_side; 3], [4; 3]);
+        let rw = [Access::ComputeShaderWrite];
+        if let Some((count, scan)) = &self.counting {
+            // Pending bricks per block of each map, then their offsets, then the slots.
+            for (pipeline, (_, blocks)) in count {
+                pipeline.bind(cmd, &[self.set.set]);
+                pipeline.dispatch(cmd, [*blocks, 1, 1], [1; 3]);
+            }
+            super::memory_barrier(ctx, cmd, &rw, &rw);
+            for (p, (_, (first, blocks))) in count.iter().enumerate() {
+                scan.record(cmd, *first, *blocks, SCAN_POOL_TOTAL + p as u32);
+            }
+            super::memory_barrier(ctx, cmd, &rw, &rw);
+            for (pipeline, (_, (_, blocks))) in self.per_pool.iter().zip(count) {
+                pipeline.bind(cmd, &[self.set.set]);
+                pipeline.dispatch(cmd, [*blocks, 1, 1], [1; 3]);
+            }
+        } else {
+            for (pipeline, pool) in self.per_pool.iter().zip(&b.layout.pools) {
+                pipeline.bind(cmd, &[self.set.set]);
+                pipeline.dispatch(cmd, [pool.map_side; 3], [4; 3]);
+            }
         }
-        super::memory_barrier(ctx, cmd, &[Access::ComputeShaderWrite], &[Access::ComputeShaderWrite]);
+        super::memory_barrier(ctx, cmd, &rw, &rw);
         self.then.bind(cmd, &[self.set.set]);
         self.then.dispatch(cmd, [1; 3], [4; 3]);
     }

@@ -27,6 +27,7 @@ impl Pass for VoxelClearPass {
         let mut uses: Vec<Use> =
             self.volumes.all().into_iter().map(|v| Use::overwrite(v, Access::TransferWrite)).collect();
         uses.push(Use::buffer(&self.volumes.list.buffer, Access::TransferWrite));
+        uses.push(Use::buffer(&self.volumes.scan, Access::TransferWrite));
         uses.extend(self.volumes.bricks.iter().map(|b| Use::buffer(&b.lists, Access::TransferWrite)));
         uses
     }
@@ -44,6 +45,8 @@ impl Pass for VoxelClearPass {
         }
         // An empty list: no entries, no groups in any range.
         unsafe { ctx.device.cmd_fill_buffer(cmd, self.volumes.list.buffer.raw, 0, list_header::SIZE, 0) };
+        // No totals yet (the brick allocation's finalize reads every pool's).
+        unsafe { ctx.device.cmd_fill_buffer(cmd, self.volumes.scan.raw, 0, vk::WHOLE_SIZE, 0) };
         // No resident bricks: every map entry is 0 (cleared above), every pool's list empty.
         if let Some(b) = &self.volumes.bricks {
             let header = b.empty_header();

@@ -1,7 +1,8 @@
 //! The work list of occupied voxels (see glsl/include/voxel_list.glsl): the bookkeeping pass
 //! that closes it after each voxelization, the indirect dispatches over it, and the zeroing
 //! of stale voxels (emptied by the last dynamic clear) in the radiance volumes.
-//! Voxelization appends to the list; the voxel light, the bounce and the dynamic clear
+//! The static resolve writes the static voxels in grid order (`VoxelResolvePass`), the dynamic
+//! voxelization appends the dynamic ones; the voxel light, the bounce and the dynamic clear
 //! dispatch over it, so they cost what the scene's surfaces hold rather than N^3.
 
 use crate::gpu::{shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuResult, Image, Pipeline};

@@ -1,9 +1,10 @@
 //! Voxelization (graphics queue): dominant-axis projection in a geometry shader, conservative
 //! coverage (VK_EXT_conservative_rasterization where present, geometry-shader dilation
 //! otherwise) and an exact triangle/voxel test per candidate voxel in the fragment shader,
-//! writing running averages of albedo, normal and emission, and appending each newly occupied
-//! voxel to the work list. One pass for static geometry (run once, marks the static flags)
-//! and one for dynamic geometry (every update).
+//! adding samples of albedo, normal and emission to the voxels' integer sums (order-independent;
+//! `VoxelResolvePass` makes averages of them) and, for dynamic geometry, appending each newly
+//! occupied voxel to the work list. One pass for static geometry (run once, marks the static
+//! flags) and one for dynamic geometry (every update).
 
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, GraphicsDesc, Pipeline};
 use crate::render::graph::{Pass, Use};
@@ -37,6 +38,7 @@ impl Voxelizer {
         binds.push(Bind::Storage(&volumes.list.buffer));
         binds.push(scene.materials.sampler_bind());
         binds.push(volumes.brick_maps_bind());
+        binds.push(volumes.sums_bind());
         let set = DescriptorSet::new(
             ctx,
             "voxelize",
@@ -121,7 +123,7 @@ impl Pass for VoxelizePass {
         uses.extend(v.volumes.uses(Access::FragmentShaderWrite, Access::FragmentShaderWrite));
         uses.extend(v.frame.reads(Access::GraphicsShaderReadBuffer));
         uses.push(v.scene.instance_reads());
-        // Appends every voxel it gives a first sample to the work list.
+        // Appends every dynamic voxel it gives a first sample to the work list.
         uses.push(Use::buffer(&v.volumes.list.buffer, Access::FragmentShaderWrite));
         uses
     }

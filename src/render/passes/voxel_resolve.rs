@@ -1,0 +1,134 @@
+//! The voxelization's sums made averages (glsl/voxel_resolve.comp, glsl/scan.comp). After the
+//! static voxelization the work list is built here, in grid order: each 8^3 brick counts its
+//! occupied voxels, one workgroup turns the counts into offsets, and each brick writes its
+//! voxels at its offset and resolves them; so the list, like the averages, is the same on every
+//! run whatever order the fragments came in. After a dynamic voxelization the dynamic voxels
+//! (appended by the voxelizer; their order decides nothing) are resolved over the list.
+
+use super::voxel_list::dispatch_list;
+use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Pipeline};
+use crate::render::graph::{Pass, Use};
+use crate::render::voxel::{list_header, VoxelVolumes};
+use ash::vk;
+use std::sync::Arc;
+
+/// The modes of glsl/voxel_resolve.comp.
+#[derive(Clone, Copy)]
+enum Mode {
+    Count = 0,
+    Write = 1,
+    Resolve = 2,
+}
+
+/// glsl/scan.comp over the volumes' scan buffer: one workgroup turns a run of counts into
+/// offsets in a fixed order.
+pub struct Scan {
+    pipeline: Pipeline,
+    set: DescriptorSet,
+}
+
+impl Scan {
+    pub fn new(ctx: &Arc<Context>, volumes: &VoxelVolumes) -> GpuResult<Scan> {
+        let set =
+            DescriptorSet::new(ctx, "voxel scan", vk::ShaderStageFlags::COMPUTE, &[Bind::Storage(&volumes.scan)])?;
+        let pipeline = Pipeline::compute(ctx, "voxel scan", shaders::SCAN_COMP, &[set.layout], 12, &[])?;
+        Ok(Scan { pipeline, set })
+    }
+
+    /// The `count` words from word `first` made exclusive prefix sums; their total into word
+    /// `total_at`.
+    pub fn record(&self, cmd: vk::CommandBuffer, first: u32, count: u32, total_at: u32) {
+        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.push(cmd, &[first, count, total_at]);
+        self.pipeline.dispatch(cmd, [1; 3], [1; 3]);
+    }
+}
+
+pub struct VoxelResolvePass {
+    volumes: Arc<VoxelVolumes>,
+    set: DescriptorSet,
+    /// Static: count, write; dynamic: resolve.
+    pipelines: Vec<Pipeline>,
+    /// Static only.
+    scan: Option<Scan>,
+    dynamic: bool,
+}
+
+impl VoxelResolvePass {
+    /// After the static voxelization (`dynamic` false) or the dynamic one.
+    pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>, dynamic: bool) -> GpuResult<Self> {
+        let v = volumes;
+        let binds = [
+            Bind::Uniform(&v.grid_buffer),
+            v.sums_bind(),
+            Bind::StorageImage(v.albedo.view),
+            Bind::StorageImage(v.normal.view),
+            Bind::StorageImage(v.emission_or_albedo().view),
+            Bind::Storage(&v.list.buffer),
+            Bind::Storage(&v.scan),
+            v.brick_maps_bind(),
+        ];
+        let set = DescriptorSet::new(ctx, "voxel resolve", vk::ShaderStageFlags::COMPUTE, &binds)?;
+        let pipeline = |mode: Mode| {
+            let spec = [(0, mode as u32), (1, u32::from(v.needs.emission))];
+            Pipeline::compute(ctx, "voxel resolve", shaders::VOXEL_RESOLVE_COMP, &[set.layout], 0, &spec)
+        };
+        let (pipelines, scan) = if dynamic {
+            (vec![pipeline(Mode::Resolve)?], None)
+        } else {
+            (vec![pipeline(Mode::Count)?, pipeline(Mode::Write)?], Some(Scan::new(ctx, v)?))
+        };
+        Ok(VoxelResolvePass { volumes: volumes.clone(), set, pipelines, scan, dynamic })
+    }
+
+    /// The static steps: count per brick, the scan over the bricks, write and resolve.
+    fn record_static(&self, ctx: &Context, cmd: vk::CommandBuffer, scan: &Scan) {
+        let bricks = self.volumes.grid.resolution.div_ceil(8);
+        let bricks_total = crate::render::voxel::scan_bricks(self.volumes.grid.resolution) as u32;
+        let between = |ctx: &Context| {
+            let rw = [Access::ComputeShaderWrite];
+            super::memory_barrier(ctx, cmd, &rw, &rw);
+        };
+        let [count, write] = &self.pipelines[..] else { unreachable!("two static steps") };
+        count.bind(cmd, &[self.set.set]);
+        count.dispatch(cmd, [bricks; 3], [1; 3]);
+        between(ctx);
+        // The counts after the header; their total into word 0.
+        scan.record(cmd, crate::render::voxel::SCAN_VOXELS, bricks_total, 0);
+        between(ctx);
+        write.bind(cmd, &[self.set.set]);
+        write.dispatch(cmd, [bricks; 3], [1; 3]);
+    }
+}
+
+impl Pass for VoxelResolvePass {
+    fn name(&self) -> &str {
+        if self.dynamic {
+            "voxel resolve dynamic"
+        } else {
+            "voxel resolve static"
+        }
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        let v = &self.volumes;
+        let mut uses = v.sums_uses(Access::ComputeShaderWrite);
+        uses.extend([&v.albedo, &v.normal].map(|i| Use::image(i, Access::ComputeShaderWrite)));
+        uses.extend(v.emission.iter().map(|e| Use::image(e, Access::ComputeShaderWrite)));
+        uses.push(Use::buffer(&v.list.buffer, Access::ComputeShaderWrite));
+        uses.push(Use::buffer(&v.scan, Access::ComputeShaderWrite));
+        if self.dynamic {
+            uses.push(Use::buffer(&v.list.buffer, Access::IndirectCommandRead));
+        }
+        uses.extend(v.brick_map_uses(Access::ComputeShaderReadStorage));
+        uses
+    }
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        match &self.scan {
+            Some(scan) => self.record_static(ctx, cmd, scan),
+            None => {
+                self.pipelines[0].bind(cmd, &[self.set.set]);
+                dispatch_list(&self.pipelines[0], cmd, &self.volumes, list_header::DYNAMIC);
+            }
+        }
+    }
+}
