@@ -321,3 +321,34 @@ pub fn read_rgb_f32(path: &Path) -> Result<RgbImageF32, OutputError> {
     let rgb = img.to_rgb32f();
     Ok(RgbImageF32 { width: rgb.width(), height: rgb.height(), data: rgb.into_raw() })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The backup [`write_all`] takes before its renames is a second name for the user's file
+    /// (a hard link, or a copy where links fail): the file stays at its own path, byte for byte,
+    /// from the backup until the new file is renamed over it, so a crash in between (when
+    /// nothing is left to put the file back) leaves the user's file where it was. Guards against
+    /// a backup made by moving the file (`rename`), which left the path empty until the new
+    /// file landed.
+    #[test]
+    fn a_backup_leaves_the_users_file_at_its_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("x.png");
+        let old: &[u8] = b"the user's earlier image";
+        std::fs::write(&path, old).unwrap();
+        let copy = backup(&path).unwrap().expect("an existing file has a backup");
+        let now = std::fs::read(&path);
+        assert!(now.as_deref().ok() == Some(old), "{} after its backup: {now:?}", path.display());
+        assert_eq!(std::fs::read(&copy).unwrap(), old, "the backup holds the old bytes");
+        assert_ne!(copy, path, "the backup is a file of its own");
+        // The new file renamed over the target leaves the backup with the old bytes (what a
+        // failed sibling's rename puts back).
+        let tmp = write_synced(&path, b"the new image").unwrap();
+        std::fs::rename(&tmp, &path).unwrap();
+        assert_eq!(std::fs::read(&copy).unwrap(), old, "the backup after the new file landed");
+        // A path with no file has no backup.
+        assert!(backup(&dir.path().join("y.png")).unwrap().is_none());
+    }
+}

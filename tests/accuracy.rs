@@ -6,6 +6,7 @@
 mod common;
 
 use common::{dvsgi, repo};
+use dvsgi::metrics::{auto_exposure, compare, LinearImage};
 use dvsgi::sweep::{Results, Row};
 use std::path::Path;
 use std::process::Output;
@@ -111,6 +112,46 @@ fn miniature_sweep_writes_rows_fronts_and_pictures_and_resumes() {
     assert!(t.contains("bounces") && !dir.path().join("other").exists(), "{t}: no directory is left behind");
     let t = fails(&sweep(&dir.path().join("other"), &["downsample=9"], "16"), 1);
     assert!(t.contains("downsample"), "{t}");
+}
+
+/// With `render.exposure = "auto"` a sweep shows each test image at the reference's exposure,
+/// as one display of both: a row's display metrics (FLIP, SSIM) are those of its image against
+/// the reference with both exposed for the reference's lit pixels. The configuration here is the
+/// direct light alone against the full reference, darker everywhere, so its own automatic
+/// exposure is brighter and would hide the missing light. Guards against the sweep exposing each
+/// test image for itself.
+#[test]
+fn an_auto_exposed_sweep_shows_the_test_image_at_the_references_exposure() {
+    let dir = tempfile::tempdir().unwrap();
+    let (out, exr) = (dir.path().join("sweep"), dir.path().join("test.exr"));
+    let size = ["--width", "24", "--height", "24", "--set", "render.exposure=\"auto\""];
+    let mut args = vec!["sweep", "scenes/cornell-box.toml", "--out", out.to_str().unwrap()];
+    args.extend(["--spp", "16", "--frames", "1", "--warmup", "0", "--grid", "mode=none"]);
+    ok(&dvsgi(&[args.as_slice(), &size].concat()));
+    let rows: Vec<Row> =
+        csv::Reader::from_path(out.join("results.csv")).unwrap().deserialize().map(|r| r.unwrap()).collect();
+    assert_eq!(rows.len(), 1);
+    // The configuration's image, rendered on its own (direct light: the same every run).
+    let render = ["render", "scenes/cornell-box.toml", "--gi", "none", "--out", exr.to_str().unwrap()];
+    ok(&dvsgi(&[render.as_slice(), &size].concat()));
+    let test = LinearImage::read_exr(&exr).unwrap();
+    let reference = LinearImage::read_exr(&out.join("reference.exr")).unwrap();
+    let (ev_ref, ev_own) = (auto_exposure(&reference), auto_exposure(&test));
+    let scene = dvsgi::scene::load(&repo().join("scenes/cornell-box.toml"), &Default::default()).unwrap();
+    let shown_at = |ev: f32| compare(&test, &reference, ev, scene.settings.tonemap).unwrap();
+    let (shared, own) = (shown_at(ev_ref), shown_at(ev_own));
+    let r = &rows[0];
+    println!(
+        "exposure: reference {ev_ref:.3}, test's own {ev_own:.3}; FLIP, SSIM: row {:.4}, {:.4}; at the reference's \
+         {:.4}, {:.4}; at its own {:.4}, {:.4}",
+        r.flip_mean, r.ssim_mean, shared.flip.mean, shared.ssim.mean, own.flip.mean, own.ssim.mean
+    );
+    assert!(ev_own > ev_ref + 0.25, "the direct light alone is darker: {ev_own} against {ev_ref}");
+    // The two exposures tell the figures apart far beyond the tolerance below.
+    let apart = (own.flip.mean - shared.flip.mean).abs() + (own.ssim.mean - shared.ssim.mean).abs();
+    assert!(apart > 0.02, "the display metrics barely depend on the exposure: {apart}");
+    assert!((r.flip_mean - shared.flip.mean).abs() < 1e-3, "FLIP {} against {}", r.flip_mean, shared.flip.mean);
+    assert!((r.ssim_mean - shared.ssim.mean).abs() < 1e-3, "SSIM {} against {}", r.ssim_mean, shared.ssim.mean);
 }
 
 fn write_exr(path: &Path, w: u32, h: u32, rgb: &[f32]) {

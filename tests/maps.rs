@@ -111,6 +111,90 @@ fn masked_quad_scene() -> Scene {
     s
 }
 
+/// A white floor (y = 0) and, one unit above it, a white square plate centred over x = -1,
+/// turned 45 degrees (its edges cross the shadow map's texel rows, so their steps average out),
+/// under a sun that travels two units across for each unit down, so that the plate's shadow is
+/// the plate moved two units towards +x. One shadow view over the whole scene, 128 texels wide.
+/// The camera looks straight down.
+fn plate_over_a_floor() -> Scene {
+    let v = Vec3::new;
+    let uv = [Vec2::ZERO; 4];
+    let floor = uv_quad("floor", [v(-3., 0., 3.), v(3., 0., 3.), v(3., 0., -3.), v(-3., 0., -3.)], uv, Vec3::Y, 0);
+    let plate = uv_quad("plate", [v(-1., 1., 0.6), v(-0.4, 1., 0.), v(-1., 1., -0.6), v(-1.6, 1., 0.)], uv, Vec3::Y, 1);
+    let camera = Camera {
+        position: v(0.5, 6.0, 0.0),
+        target: v(0.5, 0.0, 0.0),
+        up: v(0.0, 0.0, -1.0),
+        fov_y_deg: 60.0,
+        near: 0.1,
+        far: 20.0,
+    };
+    let white = |name: &str| material(name, Vec3::splat(0.8));
+    let mut s = scene(
+        vec![floor, plate],
+        vec![white("floor"), white("plate")],
+        vec![],
+        camera,
+        vec![sun(v(2.0, -1.0, 0.0), 3.0)],
+    );
+    (s.settings.shadow_map_size, s.settings.shadow_cascades) = (128, 0);
+    s
+}
+
+/// The centre, along x, of the light the plate's shadow takes from the floor: over the floor
+/// around the shadow (x in -0.4..2.4, z in -1.2..1.2), each pixel's missing light (the
+/// unshadowed floor's radiance, the median of the floor pixels, minus its own) weighs its
+/// point's x.
+fn shadow_centre_x(s: &Scene, radiance: impl Fn(u32, u32) -> f32) -> f32 {
+    let tris = triangles(s, 0.0);
+    let mut floor = Vec::new();
+    for y in 0..s.settings.height {
+        for x in 0..s.settings.width {
+            let (o, d) = camera_ray(s, x, y);
+            if let Some((t, _)) = raycast(&tris, o, d, 1e-4, 1e4).filter(|&(_, k)| tris[k].material == 0) {
+                floor.push((o + d * t, radiance(x, y)));
+            }
+        }
+    }
+    let mut levels: Vec<f32> = floor.iter().map(|f| f.1).collect();
+    levels.sort_by(f32::total_cmp);
+    let lit = levels[levels.len() / 2];
+    let (mut sum, mut weight) = (0.0f64, 0.0f64);
+    for (p, l) in floor.into_iter().filter(|(p, _)| (-0.4..2.4).contains(&p.x) && p.z.abs() < 1.2) {
+        let missing = (lit - l).clamp(0.0, lit) as f64;
+        sum += missing * p.x as f64;
+        weight += missing;
+    }
+    (sum / weight) as f32
+}
+
+/// A shadow map puts the shadow a plate casts on the floor where the path tracer does (16
+/// paths over each pixel's footprint; its analytic place is the plate's centre moved to x = 1):
+/// the centre of the light missing from the floor within half a shadow-map texel of the path
+/// tracer's, at a sun 63 degrees from the vertical. The lookup's bias against acne moves it towards the light, along the line the
+/// shadow is cast on. Guards against the lookup moved along the receiver's normal, which also
+/// moves it across the light (by the bias times sin) and so shifts every cast shadow sideways:
+/// here by about four texels.
+#[test]
+fn a_shadow_map_casts_a_shadow_where_the_path_tracer_does() {
+    let s = plate_over_a_floor();
+    let ctx = context();
+    let (out, s) = render(&ctx, s);
+    let reference = trace(&s, 16, true);
+    let test = shadow_centre_x(&s, |x, y| out.radiance_at(x, y)[1]);
+    let truth = shadow_centre_x(&s, |x, y| reference.mean[((y * reference.width + x) * 3 + 1) as usize]);
+    let bounds = s.world_bounds(0.0);
+    let (_, views) = dvsgi::render::lights::build(&s, 0.0, bounds, 128, s.settings.shadow_filter_radius);
+    // A texel of the map spans texel / cos of the floor along x.
+    let texel = views[0].params[0] * 5f32.sqrt();
+    println!(
+        "shadow centre x: shadow map {test:.4}, path tracer {truth:.4}, analytic 1; texel {texel:.4} on the floor"
+    );
+    assert!((truth - 1.0).abs() < 0.02, "the path tracer's shadow is centred at x = {truth}");
+    let off = (test - truth) / texel;
+    assert!(off.abs() < 0.5, "the shadow map's shadow is {off:.2} texels off the path tracer's");
+}
+
 /// Radiance at the pixel that shows world point p, as some renderer made it.
 type Look<'a> = Box<dyn Fn(Vec3) -> Vec3 + 'a>;
 

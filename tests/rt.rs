@@ -455,3 +455,187 @@ fn glossy_reflections_average_their_rays_while_the_view_stands_still_and_start_a
     drop((r, single));
     assert_no_validation_messages(&ctx);
 }
+
+/// The mirror scene with the wall out of the sun (it travels along (0.3, -1, 0), parallel to
+/// the wall's plane) and a white floor under the mirror that the sun lights: all the wall's light
+/// is the floor's, reflected once by the wall, whose albedo is coloured, (0.8, 0.4, 0.2). The
+/// voxel grid (8 m, 32 voxels) is placed so that the wall lies in the middle of a voxel layer: a
+/// hit's voxel lookup steps a quarter voxel behind the surface, which from a wall on a voxel's
+/// face lands in the empty layer behind it.
+fn wall_lit_by_its_floor() -> Scene {
+    let v = Vec3::new;
+    let mut s = mirror_scene();
+    let corners = [v(-3., -0.02, 3.), v(3., -0.02, 3.), v(3., -0.02, -1.5), v(-3., -0.02, -1.5)];
+    s.meshes.push(uv_quad("floor", corners, UV, Vec3::Y, 2));
+    s.materials.push(Material::diffuse("floor", Vec3::splat(WALL_ALBEDO)));
+    let floor = Object {
+        name: "floor".into(),
+        meshes: vec![2],
+        transform: Mat4::IDENTITY,
+        dynamic: false,
+        motion: Motion::None,
+    };
+    s.objects.push(floor);
+    s.materials[1].albedo = v(0.8, 0.4, 0.2);
+    let direction = v(0.3, -1.0, 0.0).normalize();
+    s.lights[0].kind = LightKind::Directional { direction, irradiance: Vec3::splat(IRRADIANCE) };
+    s.bounds = Some(Aabb { min: v(-3., -1., -3.25), max: v(3., 7., 3.) });
+    let grid = dvsgi::render::voxel::VoxelGrid::for_scene(&s);
+    let layer = (-1.5 - grid.origin.z) / grid.voxel_size;
+    assert!((layer.fract() - 0.5).abs() < 0.1, "the wall at {layer} voxels");
+    s
+}
+
+/// A mirror shows a wall lit only by bounced light in the colour of the wall's albedo: white
+/// light reaches the wall (from a white floor under a white sun), and a Lambertian surface sends
+/// back its albedo times what reaches it, so the reflection's G/R and B/R are the albedo's 0.5
+/// and 0.25 (but for the little light the wall sends back to itself through the floor), with
+/// either source of a hit's indirect light. Guards against the voxel light at a reflected hit
+/// (`gi.rt_hit_indirect = "voxel"`: the light leaving the voxel, albedo included) multiplied by
+/// the hit's albedo a second time, which shows the albedo squared: 0.25 and 0.0625.
+#[test]
+fn a_mirror_shows_a_wall_lit_by_bounced_light_in_the_colour_of_its_albedo() {
+    let ctx = context();
+    if !has_ray_queries(&ctx) {
+        return;
+    }
+    for hit in [HitIndirect::Voxel, HitIndirect::Cones] {
+        let mut s = wall_lit_by_its_floor();
+        s.settings.gi.rt_hit_indirect = hit;
+        let (out, s) = render(&ctx, s);
+        let (mut sum, mut n) = (Vec3::ZERO, 0);
+        for y in 0..s.settings.height {
+            for x in 0..s.settings.width {
+                let (p, _, w) = reflection_at(&s, x, y);
+                // Mirror pixels away from its edges whose reflection lands on the wall, a metre
+                // or more above the floor (its voxels hold the wall alone).
+                if p.x.abs() < 0.8 && p.z.abs() < 0.8 && w.x.abs() < 1.5 && (1.0..5.5).contains(&w.y) {
+                    sum += Vec3::from(out.radiance_at(x, y));
+                    n += 1;
+                }
+            }
+        }
+        let (g, b) = (sum.y / sum.x, sum.z / sum.x);
+        println!("{hit:?} at hits: the wall in the mirror ({n} pixels) {}, G/R {g:.4}, B/R {b:.4}", sum / n as f32);
+        assert!(n >= 20, "only {n} pixels see the wall in the mirror");
+        assert!(sum.x / n as f32 > 0.01, "{hit:?}: the wall has bounced light: {}", sum / n as f32);
+        assert!((g - 0.5).abs() < 0.03 && (b - 0.25).abs() < 0.02, "{hit:?}: G/R {g:.4}, B/R {b:.4}, not 0.5, 0.25");
+    }
+    assert_no_validation_messages(&ctx);
+}
+
+/// The mirror follows a light that moves while the view and the objects stand still: after
+/// three frames under the sun that lights the wall head-on, the sun turns 60 degrees (the wall
+/// then gets half its irradiance) and in that same frame the mirror shows the wall at its new
+/// radiance, Ks (n+8)/(n+1) cos^2 of it within 2%. Guards against the reflections' history
+/// restarting only when the camera or an object moves: averaged with the frames before the
+/// turn, the mirror showed the wall at 1.75 times its radiance.
+#[test]
+fn the_mirror_follows_a_light_that_moves_while_the_view_stands_still() {
+    let ctx = context();
+    if !has_ray_queries(&ctx) {
+        return;
+    }
+    let s = mirror_scene();
+    assert!(s.settings.gi.specular_history > 4, "the reflections keep a history");
+    let mut r = Renderer::new(&ctx, s.clone()).expect("renderer");
+    for _ in 0..3 {
+        r.render(0.0, false).expect("frame");
+    }
+    // wi = (0, sin 60, cos 60): the wall (normal +z) gets cos 60 of the irradiance.
+    let direction = Vec3::new(0.0, -(0.75f32.sqrt()), -0.5);
+    r.scene.lights[0].kind = LightKind::Directional { direction, irradiance: Vec3::splat(IRRADIANCE) };
+    r.render(0.0, true).expect("frame after the turn");
+    let out = r.output();
+    drop(r);
+    assert_reflects_the_wall(&s, &out, &out, 0.5 * WALL_ALBEDO * IRRADIANCE / PI);
+    assert_no_validation_messages(&ctx);
+}
+
+/// A ceiling lamp's housing, as cornell-sphere's light quad: a white ceiling (y = 2, facing
+/// down) and, a centimetre under it, an opaque square (half side 0.4, turned 30 degrees) with a
+/// point light 3 cm under the ceiling below its centre. The square shades the ceiling out to
+/// 1.5 times its own size; the camera looks straight up at it from 2 m below, 64 x 64.
+fn lamp_housing() -> Scene {
+    let v = Vec3::new;
+    let (c, s30) = (30f32.to_radians().cos(), 30f32.to_radians().sin());
+    let (u, w) = (v(c, 0.0, s30) * 0.4, v(-s30, 0.0, c) * 0.4);
+    let ceiling = quad(v(0.0, 2.0, 0.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, 2.0), Vec3::NEG_Y);
+    let housing = quad(v(0.0, 1.99, 0.0), u, w, Vec3::NEG_Y);
+    let camera =
+        Camera { position: Vec3::ZERO, target: v(0.0, 2.0, 0.0), up: Vec3::Z, fov_y_deg: 60.0, near: 0.05, far: 10.0 };
+    let lamp = Light {
+        name: "lamp".into(),
+        kind: LightKind::Point { position: v(0.0, 1.97, 0.0), intensity: Vec3::ONE },
+        cast_shadows: true,
+        motion: Motion::None,
+    };
+    let white = |name: &str| Material::diffuse(name, Vec3::splat(WALL_ALBEDO));
+    let mut s = scene_of(
+        vec![mesh("ceiling", &ceiling, 0, None), mesh("housing", &housing, 1, None)],
+        vec![white("ceiling"), white("housing")],
+        camera,
+        vec![lamp],
+        Aabb { min: v(-2.5, -0.5, -2.5), max: v(2.5, 2.5, 2.5) },
+    );
+    (s.settings.width, s.settings.height) = (64, 64);
+    (s.settings.gi.mode, s.settings.gi.shadows) = (GiMode::None, DirectShadows::Rt);
+    s
+}
+
+/// Shadow rays shade the ceiling beside a lamp's housing as the path tracer does: the edge of
+/// the shadow the housing casts on the ceiling (seen around it from below) lies within 3/4 of a
+/// pixel of the path tracer's, on average along it (the pixels whose shadowing differs, over the
+/// edge's length in pixels; a pixel is shadowed where its direct light is under half the
+/// unshadowed ceiling's, albedo / pi I cos / d^2). The rays from there graze the housing's edge
+/// from a centimetre under it, so where they start matters: a ray started d lower passes under
+/// the edge 20 d further out. Guards against the rays started a tenth of the
+/// pixel's footprint off the surface instead of a hundredth (cornell-sphere's ceiling relMSE
+/// 6.8 against 2.0).
+#[test]
+fn shadow_rays_shade_the_ceiling_beside_a_lamps_housing_as_the_path_tracer_does() {
+    let ctx = context();
+    if !has_ray_queries(&ctx) {
+        return;
+    }
+    let s = lamp_housing();
+    let options = ReferenceOptions { spp: 1, max_bounces: Some(0), ..Default::default() };
+    let mut pt = PathTracer::new(&ctx, &s, options).expect("path tracer");
+    pt.run(|_, _| {}).expect("trace");
+    let reference = pt.image().expect("read back").mean;
+    drop(pt);
+    let (out, s) = render(&ctx, s);
+    let tris = triangles(&s, 0.0);
+    let lamp = Vec3::new(0.0, 1.97, 0.0);
+    let (mut shadowed, mut differ) = (0, 0);
+    for y in 0..s.settings.height {
+        for x in 0..s.settings.width {
+            let (o, d) = camera_ray(&s, x, y);
+            let Some((t, _)) = raycast(&tris, o, d, 1e-4, 1e4).filter(|&(_, k)| tris[k].material == 0) else {
+                continue;
+            };
+            let to_lamp = lamp - (o + d * t);
+            let lit = WALL_ALBEDO / PI * (-to_lamp.normalize().y).max(0.0) / to_lamp.length_squared();
+            let i = (y * s.settings.width + x) as usize;
+            let (pt_dark, rt_dark) = (reference[3 * i + 1] < 0.5 * lit, out.radiance[4 * i + 1] < 0.5 * lit);
+            shadowed += usize::from(pt_dark);
+            differ += usize::from(pt_dark != rt_dark);
+        }
+    }
+    // The shadow's edge: a square of half side 0.4 * 3 / 2 (the housing seen from the lamp),
+    // in pixels of the ceiling 2 m from the camera.
+    let pixel = 2.0 * 2.0 * (30f32.to_radians()).tan() / s.settings.height as f32;
+    let edge = 8.0 * 0.6 / pixel;
+    println!(
+        "the housing's shadow on the ceiling: {shadowed} pixels in the path tracer's, {differ} differ: its edge {:.2} \
+         pixels off ({edge:.0} pixels long)",
+        differ as f32 / edge
+    );
+    assert!(shadowed as f32 > 1.5 * edge, "only {shadowed} shadowed ceiling pixels in view");
+    assert!(
+        (differ as f32) < 0.75 * edge,
+        "the shadow's edge is {:.2} pixels off the path tracer's",
+        differ as f32 / edge
+    );
+    assert_no_validation_messages(&ctx);
+}
