@@ -55,10 +55,13 @@ pub struct BrickListPass {
     then: Pipeline,
     set: DescriptorSet,
     name: &'static str,
-    /// Allocation only: per pool the counting pipeline and its run of the scan buffer
-    /// (first word, blocks), and the scan.
-    counting: Option<(Vec<(Pipeline, (u32, u32))>, Scan)>,
+    /// Allocation only: the counting before it.
+    counting: Option<Counting>,
 }
+
+/// Per pool the pipeline counting its pending bricks per block and its run of the scan buffer
+/// (first word, blocks); the scan that makes the counts offsets.
+type Counting = (Vec<(Pipeline, (u32, u32))>, Scan);
 
 impl BrickListPass {
     /// After a marking run: the pending bricks allocated. None with dense volumes. `dynamic`
