@@ -92,14 +92,7 @@ fn masked_quad_scene() -> Scene {
     red.mask_texture = Some(0);
     // Greyscale coverage (as Crytek's masks): opaque where u < 0.5.
     let mask = texture("mask", 64, TextureUse::Mask, |x, _| [if x < 32 { 255 } else { 0 }; 4]);
-    let camera = Camera {
-        position: v(0.5, 6.0, 0.0),
-        target: v(0.5, 0.0, 0.0),
-        up: v(0.0, 0.0, -1.0),
-        fov_y_deg: 60.0,
-        near: 0.1,
-        far: 20.0,
-    };
+    let camera = looking_down();
     let mut s = scene(
         vec![floor, leaf],
         vec![material("floor", Vec3::splat(0.8)), red],
@@ -109,6 +102,19 @@ fn masked_quad_scene() -> Scene {
     );
     s.bounds = Some(Aabb { min: v(-3., -3., -3.), max: v(3., 3., 3.) });
     s
+}
+
+/// A camera 6 units over (0.5, 0, 0), looking straight down, +x to the right.
+fn looking_down() -> Camera {
+    let v = Vec3::new;
+    Camera {
+        position: v(0.5, 6.0, 0.0),
+        target: v(0.5, 0.0, 0.0),
+        up: v(0.0, 0.0, -1.0),
+        fov_y_deg: 60.0,
+        near: 0.1,
+        far: 20.0,
+    }
 }
 
 /// A white floor (y = 0) and, one unit above it, a white square plate centred over x = -1,
@@ -121,14 +127,7 @@ fn plate_over_a_floor() -> Scene {
     let uv = [Vec2::ZERO; 4];
     let floor = uv_quad("floor", [v(-3., 0., 3.), v(3., 0., 3.), v(3., 0., -3.), v(-3., 0., -3.)], uv, Vec3::Y, 0);
     let plate = uv_quad("plate", [v(-1., 1., 0.6), v(-0.4, 1., 0.), v(-1., 1., -0.6), v(-1.6, 1., 0.)], uv, Vec3::Y, 1);
-    let camera = Camera {
-        position: v(0.5, 6.0, 0.0),
-        target: v(0.5, 0.0, 0.0),
-        up: v(0.0, 0.0, -1.0),
-        fov_y_deg: 60.0,
-        near: 0.1,
-        far: 20.0,
-    };
+    let camera = looking_down();
     let white = |name: &str| material(name, Vec3::splat(0.8));
     let mut s = scene(
         vec![floor, plate],

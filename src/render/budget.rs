@@ -305,8 +305,7 @@ fn voxel_allocations(scene: &Scene, layout: VoxelLayout) -> Vec<Alloc> {
     // The voxelization's sums (a count, albedo and normal, emission) and the scan over 8^3
     // bricks that orders the work list.
     vols.extend((0..crate::render::voxel::sum_words(needs.emission)).map(|_| volume(F::R32_UINT, false)));
-    let sides: Vec<u32> = layout.as_ref().map_or(Vec::new(), |l| l.pools.iter().map(|p| p.map_side).collect());
-    vols.push(Alloc::Buffer(4 * crate::render::voxel::ScanLayout::new(res, &sides).words));
+    vols.push(Alloc::Buffer(4 * crate::render::voxel::ScanLayout::new(res, layout.as_ref()).words));
     if needs.dynamic {
         vols.push(volume(F::R8_UINT, false));
     }

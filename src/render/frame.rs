@@ -19,7 +19,7 @@ use super::passes::voxel_clear::{DynamicClearPass, VoxelClearPass};
 use super::passes::voxel_light::VoxelLightPass;
 use super::passes::voxel_list::{ListKeeper, ListStep, VoxelListPass};
 use super::passes::voxel_mips::{VoxelMipPass, VoxelMips};
-use super::passes::voxel_resolve::VoxelResolvePass;
+use super::passes::voxel_resolve::{Scan, VoxelResolvePass};
 use super::passes::voxel_view::{VoxelMipViewPass, VoxelViewPass};
 use super::passes::voxelize::{VoxelizePass, Voxelizer};
 use super::rays::{missing_ray_queries, RtReflectPass, SceneRays, TopLevelBuildPass};
@@ -64,13 +64,15 @@ impl VoxelPasses {
         let volumes = Arc::new(VoxelVolumes::new(ctx, scene)?);
         let voxelizer = Voxelizer::new(ctx, scene_gpu, frame, &volumes)?;
         let keeper = ListKeeper::new(ctx, &volumes)?;
+        // One scan (glsl/scan.comp) for the static work list and every brick allocation.
+        let scan = Arc::new(Scan::new(ctx, &volumes)?);
         let dynamic = if volumes.needs.dynamic {
             Some(DynamicPasses {
                 clear: DynamicClearPass::new(ctx, &volumes, &keeper)?,
-                bricks: BrickPasses::new(ctx, &voxelizer, &volumes, true)?,
+                bricks: BrickPasses::new(ctx, &voxelizer, &volumes, true, &scan)?,
                 voxelize: VoxelizePass::new(&voxelizer, true),
                 list: VoxelListPass::new(&keeper, ListStep::Dynamic),
-                resolve: VoxelResolvePass::new(ctx, &volumes, true)?,
+                resolve: VoxelResolvePass::after_dynamic(ctx, &volumes)?,
             })
         } else {
             None
@@ -95,9 +97,9 @@ impl VoxelPasses {
         Ok(VoxelPasses {
             light: VoxelLightPass::new(ctx, frame, &volumes, atlas, &s.gi)?,
             clear: VoxelClearPass::new(&volumes),
-            bricks_static: BrickPasses::new(ctx, &voxelizer, &volumes, false)?,
+            bricks_static: BrickPasses::new(ctx, &voxelizer, &volumes, false, &scan)?,
             voxelize_static: VoxelizePass::new(&voxelizer, false),
-            resolve_static: VoxelResolvePass::new(ctx, &volumes, false)?,
+            resolve_static: VoxelResolvePass::after_static(ctx, &volumes, &scan)?,
             list_static: VoxelListPass::new(&keeper, ListStep::Static),
             dynamic,
             mips,
@@ -134,9 +136,10 @@ impl BrickPasses {
         voxelizer: &Arc<Voxelizer>,
         volumes: &Arc<VoxelVolumes>,
         dynamic: bool,
+        scan: &Arc<Scan>,
     ) -> GpuResult<Option<Self>> {
         let (Some(mark), Some(allocate)) =
-            (VoxelizePass::marking(voxelizer, dynamic), BrickListPass::allocate(ctx, volumes, dynamic)?)
+            (VoxelizePass::marking(voxelizer, dynamic), BrickListPass::allocate(ctx, volumes, dynamic, scan)?)
         else {
             return Ok(None);
         };

@@ -259,8 +259,8 @@ pub fn scan_bricks(resolution: u32) -> u64 {
 }
 
 /// The scan buffer's layout (glsl/include/scan_buffer.glsl), in words: a 16-word header of
-/// totals, one word per 8^3 brick of the grid, then for each pool of bricks one word per block
-/// of 512 map entries (`pools`: the pools' map sides).
+/// totals, one word per 8^3 brick of the grid, then for each pool of bricks (`bricks`) one word
+/// per block of 512 map entries.
 pub struct ScanLayout {
     /// Per pool: its first word and its blocks.
     pub pools: Vec<(u32, u32)>,
@@ -272,12 +272,13 @@ pub const SCAN_VOXELS: u32 = 16;
 pub const SCAN_POOL_TOTAL: u32 = 4;
 
 impl ScanLayout {
-    pub fn new(resolution: u32, map_sides: &[u32]) -> ScanLayout {
+    pub fn new(resolution: u32, bricks: Option<&BrickLayout>) -> ScanLayout {
         let mut next = u64::from(SCAN_VOXELS) + scan_bricks(resolution);
-        let pools = map_sides
+        let pools = bricks
+            .map_or(&[][..], |b| &b.pools[..])
             .iter()
-            .map(|&side| {
-                let blocks = u64::from(side).pow(3).div_ceil(512);
+            .map(|p| {
+                let blocks = u64::from(p.map_side).pow(3).div_ceil(512);
                 let pool = (next as u32, blocks as u32);
                 next += blocks;
                 pool
@@ -683,8 +684,7 @@ fn directional_volumes(
 /// The scan buffer ([`ScanLayout`]) for a grid of `res` and its pools of bricks, if any.
 fn scan_buffer(ctx: &Arc<Context>, res: u32, bricks: Option<&Bricks>) -> GpuResult<Arc<Buffer>> {
     let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-    let sides: Vec<u32> = bricks.map_or(Vec::new(), |b| b.layout.pools.iter().map(|p| p.map_side).collect());
-    let bytes = 4 * ScanLayout::new(res, &sides).words;
+    let bytes = 4 * ScanLayout::new(res, bricks.map(|b| &b.layout)).words;
     Buffer::new(ctx, "voxel scan", bytes, usage, gpu_allocator::MemoryLocation::GpuOnly).map(Arc::new)
 }
 

@@ -61,21 +61,26 @@ pub struct BrickListPass {
 
 /// Per pool the pipeline counting its pending bricks per block and its run of the scan buffer
 /// (first word, blocks); the scan that makes the counts offsets.
-type Counting = (Vec<(Pipeline, (u32, u32))>, Scan);
+type Counting = (Vec<(Pipeline, (u32, u32))>, Arc<Scan>);
 
 impl BrickListPass {
     /// After a marking run: the pending bricks allocated. None with dense volumes. `dynamic`
     /// names the pass after the voxelization it precedes (the static one records the static
-    /// bricks).
-    pub fn allocate(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>, dynamic: bool) -> GpuResult<Option<Self>> {
+    /// bricks). `scan` turns the counts of pending bricks into slots.
+    pub fn allocate(
+        ctx: &Arc<Context>,
+        volumes: &Arc<VoxelVolumes>,
+        dynamic: bool,
+        scan: &Arc<Scan>,
+    ) -> GpuResult<Option<Self>> {
         let name = if dynamic { "allocate bricks dynamic" } else { "allocate bricks static" };
-        BrickListPass::new(ctx, volumes, (Mode::Allocate, Mode::Finalize, !dynamic), name)
+        BrickListPass::new(ctx, volumes, (Mode::Allocate, Mode::Finalize, !dynamic), name, Some(scan))
     }
 
     /// Before the dynamic objects are marked again: their bricks leave the maps and every
     /// pool's list ends at its static bricks. None with dense volumes.
     pub fn release(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>) -> GpuResult<Option<Self>> {
-        BrickListPass::new(ctx, volumes, (Mode::Release, Mode::Restart, false), "release bricks dynamic")
+        BrickListPass::new(ctx, volumes, (Mode::Release, Mode::Restart, false), "release bricks dynamic", None)
     }
 
     fn new(
@@ -83,6 +88,7 @@ impl BrickListPass {
         volumes: &Arc<VoxelVolumes>,
         (per_pool_mode, then, after_static): (Mode, Mode, bool),
         name: &'static str,
+        scan: Option<&Arc<Scan>>,
     ) -> GpuResult<Option<Self>> {
         let Some(bricks) = &volumes.bricks else { return Ok(None) };
         let binds = [
@@ -92,19 +98,18 @@ impl BrickListPass {
             Bind::Storage(&volumes.scan),
         ];
         let set = DescriptorSet::new(ctx, name, vk::ShaderStageFlags::COMPUTE, &binds)?;
-        let sides: Vec<u32> = bricks.layout.pools.iter().map(|p| p.map_side).collect();
-        let regions = ScanLayout::new(volumes.grid.resolution, &sides).pools;
-        let per_pool = (0..sides.len() as u32)
+        let regions = ScanLayout::new(volumes.grid.resolution, Some(&bricks.layout)).pools;
+        let per_pool = (0..regions.len() as u32)
             .map(|p| alloc_pipeline(ctx, &set, p, per_pool_mode, (false, regions[p as usize].0)))
             .collect::<GpuResult<Vec<_>>>()?;
         let then = alloc_pipeline(ctx, &set, 0, then, (after_static, 0))?;
         // The allocation counts and scans first (`Mode::Count`, then scan.comp).
-        let counting = matches!(per_pool_mode, Mode::Allocate)
-            .then(|| -> GpuResult<_> {
+        let counting = scan
+            .map(|scan| -> GpuResult<_> {
                 let count = (regions.iter().enumerate())
                     .map(|(p, &r)| Ok((alloc_pipeline(ctx, &set, p as u32, Mode::Count, (false, r.0))?, r)))
                     .collect::<GpuResult<Vec<_>>>()?;
-                Ok((count, Scan::new(ctx, volumes)?))
+                Ok((count, scan.clone()))
             })
             .transpose()?;
         Ok(Some(BrickListPass { volumes: volumes.clone(), per_pool, then, set, name, counting }))

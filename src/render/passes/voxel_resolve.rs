@@ -49,14 +49,22 @@ pub struct VoxelResolvePass {
     set: DescriptorSet,
     /// Static: count, write; dynamic: resolve.
     pipelines: Vec<Pipeline>,
-    /// Static only.
-    scan: Option<Scan>,
-    dynamic: bool,
+    /// Static only: the scan that turns the bricks' counts into list offsets.
+    scan: Option<Arc<Scan>>,
 }
 
 impl VoxelResolvePass {
-    /// After the static voxelization (`dynamic` false) or the dynamic one.
-    pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>, dynamic: bool) -> GpuResult<Self> {
+    /// After the static voxelization: builds the work list with `scan`.
+    pub fn after_static(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>, scan: &Arc<Scan>) -> GpuResult<Self> {
+        VoxelResolvePass::new(ctx, volumes, Some(scan))
+    }
+
+    /// After the dynamic voxelization: over the list's dynamic range.
+    pub fn after_dynamic(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>) -> GpuResult<Self> {
+        VoxelResolvePass::new(ctx, volumes, None)
+    }
+
+    fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>, scan: Option<&Arc<Scan>>) -> GpuResult<Self> {
         let v = volumes;
         let binds = [
             Bind::Uniform(&v.grid_buffer),
@@ -73,12 +81,11 @@ impl VoxelResolvePass {
             let spec = [(0, mode as u32), (1, u32::from(v.needs.emission))];
             Pipeline::compute(ctx, "voxel resolve", shaders::VOXEL_RESOLVE_COMP, &[set.layout], 0, &spec)
         };
-        let (pipelines, scan) = if dynamic {
-            (vec![pipeline(Mode::Resolve)?], None)
-        } else {
-            (vec![pipeline(Mode::Count)?, pipeline(Mode::Write)?], Some(Scan::new(ctx, v)?))
+        let pipelines = match scan {
+            Some(_) => vec![pipeline(Mode::Count)?, pipeline(Mode::Write)?],
+            None => vec![pipeline(Mode::Resolve)?],
         };
-        Ok(VoxelResolvePass { volumes: volumes.clone(), set, pipelines, scan, dynamic })
+        Ok(VoxelResolvePass { volumes: volumes.clone(), set, pipelines, scan: scan.cloned() })
     }
 
     /// The static steps: count per brick, the scan over the bricks, write and resolve.
@@ -103,10 +110,10 @@ impl VoxelResolvePass {
 
 impl Pass for VoxelResolvePass {
     fn name(&self) -> &str {
-        if self.dynamic {
-            "voxel resolve dynamic"
-        } else {
+        if self.scan.is_some() {
             "voxel resolve static"
+        } else {
+            "voxel resolve dynamic"
         }
     }
     fn uses(&self) -> Vec<Use<'_>> {
@@ -115,9 +122,9 @@ impl Pass for VoxelResolvePass {
         uses.extend([&v.albedo, &v.normal].map(|i| Use::image(i, Access::ComputeShaderWrite)));
         uses.extend(v.emission.iter().map(|e| Use::image(e, Access::ComputeShaderWrite)));
         uses.push(Use::buffer(&v.list.buffer, Access::ComputeShaderWrite));
-        uses.push(Use::buffer(&v.scan, Access::ComputeShaderWrite));
-        if self.dynamic {
-            uses.push(Use::buffer(&v.list.buffer, Access::IndirectCommandRead));
+        match &self.scan {
+            Some(_) => uses.push(Use::buffer(&v.scan, Access::ComputeShaderWrite)),
+            None => uses.push(Use::buffer(&v.list.buffer, Access::IndirectCommandRead)),
         }
         uses.extend(v.brick_map_uses(Access::ComputeShaderReadStorage));
         uses
