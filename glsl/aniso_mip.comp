@@ -35,7 +35,7 @@ vec4 over(vec4 front, vec4 back) {
 
 // Where texel C of the source level is stored; (-1) when it is empty (not resident).
 ivec3 src_texel(ivec3 C) {
-    if (FROM_FULL) return full_texel(C);
+    if (FROM_FULL) return radiance_texel(C);
     return SRC_POOL == 0 ? C : level_texel(SRC_POOL, C);
 }
 

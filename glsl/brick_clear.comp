@@ -2,7 +2,8 @@
 // Empties the slots of the dynamic bricks (bricks.glsl) once they are allocated, before the
 // dynamic objects are voxelized into them: each dynamic update hands those slots out anew, so a
 // slot may last have held another brick. Pool 0: the full-resolution volumes (8^3 texels per
-// slot); pools 1..: the six directional volumes of their level (9^3 per slot, apron included).
+// slot, 9^3 with the apron for the radiance volumes); pools 1..: the six directional volumes of
+// their level (9^3 per slot, apron included).
 #include "common.glsl"
 #include "voxel.glsl"
 
@@ -29,11 +30,7 @@ void main() {
     ivec3 t = ivec3(gl_LocalInvocationID) + 4 * ivec3(block & 1u, (block >> 1) & 1u, block >> 2);
     if (POOL == 0) {
         ivec3 p = slot_texel(0, slot, 8) + t;
-        for (int k = 0; k < 3; ++k) {
-            imageStore(full_words[k], p, uvec4(0u));
-            imageStore(full_radiance[k], p, vec4(0.0));
-        }
-        return;
+        for (int k = 0; k < 3; ++k) imageStore(full_words[k], p, uvec4(0u));
     }
     // 8^3 invocations for 9^3 texels: the last one on an axis also takes texel 8.
     ivec3 last = ivec3(equal(t, ivec3(7)));
@@ -42,7 +39,11 @@ void main() {
         for (int y = 0; y <= last.y; ++y) {
             for (int x = 0; x <= last.x; ++x) {
                 ivec3 p = origin + t + ivec3(x, y, z);
-                for (int f = 0; f < 6; ++f) imageStore(faces[f], p, vec4(0.0));
+                if (POOL == 0) {
+                    for (int k = 0; k < 3; ++k) imageStore(full_radiance[k], p, vec4(0.0));
+                } else {
+                    for (int f = 0; f < 6; ++f) imageStore(faces[f], p, vec4(0.0));
+                }
             }
         }
     }

@@ -58,7 +58,7 @@ vec3 first_voxel_radiance(vec3 g, vec3 d) {
     VoxelWalk w = voxel_walk(g, d);
     if (any(lessThan(w.c, ivec3(0))) || any(greaterThanEqual(w.c, ivec3(res)))) return vec3(0.0);
     for (int i = 0; i < 3 * 512; ++i) {
-        ivec3 t = full_texel(w.c);
+        ivec3 t = radiance_texel(w.c);
         vec4 v = t.x < 0 ? vec4(0.0) : texelFetch(vox_lod0, t, 0);
         if (v.a > 0.0) return v.rgb;
         if (!voxel_walk_step(w, res)) break;

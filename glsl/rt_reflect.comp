@@ -80,7 +80,7 @@ vec3 hit_indirect(HitSurface s) {
         float ao = (gi.counts.w & GI_FLAG_AO) != 0u ? diffuse.a : 1.0;
         return s.albedo * max(diffuse.rgb, vec3(0.0)) * frame.radiance_scale.y * ao;
     }
-    ivec3 t = full_texel(ivec3(floor(g - s.ng * 0.25)));
+    ivec3 t = radiance_texel(ivec3(floor(g - s.ng * 0.25)));
     if (t.x < 0) return vec3(0.0);
     vec3 bounced = texelFetch(vox_lod0, t, 0).rgb - texelFetch(vox_direct, t, 0).rgb;
     return max(bounced, vec3(0.0)) * frame.radiance_scale.y;

@@ -20,8 +20,9 @@ layout(set = 0, binding = 5, r32ui) uniform readonly uimage3D brick_maps[4];
 void main() {
     uint entry = list_invocation();
     if (entry >= vlist.occupied.count) return;
-    ivec3 t = full_texel(unpack_voxel(vlist.entries[entry]));
+    ivec3 c = unpack_voxel(vlist.entries[entry]);
+    ivec3 t = radiance_texel(c);
     if (t.x < 0) return;
     vec3 sum = imageLoad(vox_direct, t).rgb + imageLoad(vox_indirect, t).rgb;
-    imageStore(vox_bounced, t, vec4(min(sum, vec3(HALF_MAX)), 1.0));
+    RADIANCE_STORE(vox_bounced, c, vec4(min(sum, vec3(HALF_MAX)), 1.0));
 }

@@ -122,5 +122,5 @@ void main() {
     if (HAS_EMISSION) {
         radiance += unpack_rgb_count(imageLoad(vox_emission, t).r).rgb / 255.0 * grid.params.x;
     }
-    imageStore(vox_radiance, t, vec4(min(radiance * grid.params.y, vec3(HALF_MAX)), 1.0));
+    RADIANCE_STORE(vox_radiance, c, vec4(min(radiance * grid.params.y, vec3(HALF_MAX)), 1.0));
 }

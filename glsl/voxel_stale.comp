@@ -19,7 +19,9 @@ layout(set = 0, binding = 5, r32ui) uniform readonly uimage3D brick_maps[4];
 void main() {
     uint i = list_invocation();
     if (i >= vlist.stale.count) return;
-    ivec3 t = full_texel(unpack_voxel(stale_entries[i]));
-    if (t.x < 0 || (imageLoad(vox_albedo, t).r >> 24) != 0u) return;
-    imageStore(vox_target, t, vec4(0.0));
+    ivec3 c = unpack_voxel(stale_entries[i]);
+    ivec3 t = full_texel(c);
+    if (t.x >= 0 && (imageLoad(vox_albedo, t).r >> 24) != 0u) return;
+    // Also where its brick is no longer resident: the apron copies above it may be.
+    RADIANCE_STORE(vox_target, c, vec4(0.0));
 }

@@ -35,7 +35,7 @@ void main() {
             if ((v >> 24) != 0u) {
                 vec3 rgb = unpack_rgb_count(v).rgb / 255.0;
                 result.rgb = MODE == 2u ? rgb * grid.params.x : (MODE == 3u ? vec3(0.0) : rgb);
-                if (MODE == 4u) result.rgb = imageLoad(vox_radiance, t).rgb * grid.params.z;
+                if (MODE == 4u) result.rgb = imageLoad(vox_radiance, radiance_texel(w.c)).rgb * grid.params.z;
                 break;
             }
             if (!voxel_walk_step(w, int(res))) break;

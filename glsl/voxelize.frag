@@ -58,16 +58,15 @@ void add_sample(ivec3 t, int first, vec3 value) {
     if (q.z != 0u) imageAtomicAdd(vox_sums[first + 2], t, q.z);
 }
 
-// The bricks voxel vc needs: its own full-resolution brick, and on each pooled directional
-// level the brick of the texel over it and the brick whose apron holds that texel.
+// The bricks voxel vc needs: in the full-resolution pool and on each pooled directional level,
+// the brick of the texel over it and the brick whose apron holds that texel.
 void mark_bricks(ivec3 vc) {
-    brick_mark(0, vc >> 3);
-    for (int l = 0; l < int(grid.dims.y); ++l) {
-        ivec3 t = vc >> (l + 1);
+    for (int p = 0; p <= int(grid.dims.y); ++p) {
+        ivec3 t = vc >> p;
         ivec3 lo = t >> 3, hi = (t + 1) >> 3;
         for (int z = lo.z; z <= hi.z; ++z) {
             for (int y = lo.y; y <= hi.y; ++y) {
-                for (int x = lo.x; x <= hi.x; ++x) brick_mark(l + 1, ivec3(x, y, z));
+                for (int x = lo.x; x <= hi.x; ++x) brick_mark(p, ivec3(x, y, z));
             }
         }
     }

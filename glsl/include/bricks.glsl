@@ -1,10 +1,13 @@
 // The bricked layout of the voxel volumes (render::bricks, docs/SPARSE.md). A volume stores
 // only resident bricks of 8^3 texels, side by side in a pool image; a map per pool (R32_UINT,
 // one texel per brick of the grid) holds 0 for a brick that is not resident, else its pool
-// slot + 1. Pool 0 holds the full-resolution volumes (8^3 per brick); pools 1.. hold the
-// directional levels larger than 64^3, each brick with a one-texel apron on its low side
-// (9^3: texels 8b-1 .. 8b+7 of brick b per axis) so hardware trilinear filtering stays inside
-// one brick. With grid.dims.z == 0 the volumes are dense and these helpers are the identity.
+// slot + 1. Pool 0 holds the full-resolution volumes; pools 1.. the directional levels larger
+// than 64^3. Every volume that is sampled with hardware trilinear filtering (pool 0's radiance
+// volumes, every directional level) stores each brick with a one-texel apron on its low side
+// (9^3: texels 8b-1 .. 8b+7 of brick b per axis), so a filter stays inside one brick; a brick
+// is resident when any of its 9^3 texels can be non-empty. Pool 0's integer volumes (albedo,
+// normal, emission, flags, sums) share its slots without the apron (8^3 per slot).
+// With grid.dims.z == 0 the volumes are dense and these helpers are the identity.
 //
 // The including shader declares, before including this file:
 //   uniform GridBlock { VoxelGrid grid; };
@@ -72,14 +75,47 @@ ivec3 slot_texel(int p, uint s, int stride) {
     return ivec3(s % q.x, (s / q.x) % q.y, s / (q.x * q.y)) * stride;
 }
 
-// The pool texel of full-resolution voxel c; (-1) where c is outside the grid or its brick is
-// not resident (it reads as empty).
+// The pool texel of full-resolution voxel c in an integer volume (8^3 per slot); (-1) where c
+// is outside the grid or its brick is not resident (it reads as empty).
 ivec3 full_texel(ivec3 c) {
     if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(int(grid.dims.x))))) return ivec3(-1);
     if (!bricked()) return c;
     uint s = brick_slot(0, c >> 3);
     return s == 0u ? ivec3(-1) : slot_texel(0, s - 1u, 8) + (c & 7);
 }
+
+// The pool texel of full-resolution voxel c in a radiance volume (9^3 per slot, the apron
+// first); (-1) as full_texel.
+ivec3 radiance_texel(ivec3 c) {
+    if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(int(grid.dims.x))))) return ivec3(-1);
+    if (!bricked()) return c;
+    uint s = brick_slot(0, c >> 3);
+    return s == 0u ? ivec3(-1) : slot_texel(0, s - 1u, 9) + (c & 7) + 1;
+}
+
+// Store radiance v of full-resolution voxel c (inside the grid) in radiance volume `img`: its
+// own brick's texel and, bricked, the copy in the apron of each resident brick above it on
+// the axes where c is a brick's last texel. Every writer of a radiance volume stores through
+// this, so the aprons always hold what their neighbours hold.
+#define RADIANCE_STORE(img, c, v)                                                               \
+    {                                                                                            \
+        ivec3 c_ = (c);                                                                          \
+        vec4 v_ = (v);                                                                           \
+        if (!bricked()) {                                                                        \
+            imageStore(img, c_, v_);                                                             \
+        } else {                                                                                 \
+            ivec3 lo_ = c_ >> 3, hi_ = (c_ + 1) >> 3;                                            \
+            for (int z_ = lo_.z; z_ <= hi_.z; ++z_) {                                            \
+                for (int y_ = lo_.y; y_ <= hi_.y; ++y_) {                                        \
+                    for (int x_ = lo_.x; x_ <= hi_.x; ++x_) {                                    \
+                        ivec3 b_ = ivec3(x_, y_, z_);                                            \
+                        uint s_ = brick_slot(0, b_);                                             \
+                        if (s_ != 0u) imageStore(img, slot_texel(0, s_ - 1u, 9) + c_ - b_ * 8 + 1, v_); \
+                    }                                                                            \
+                }                                                                                \
+            }                                                                                    \
+        }                                                                                        \
+    }
 
 // The pool texel of texel t of pooled directional level p - 1 (its own brick's interior);
 // (-1) outside the level or where the brick is not resident.
@@ -89,7 +125,8 @@ ivec3 level_texel(int p, ivec3 t) {
     return s == 0u ? ivec3(-1) : slot_texel(p, s - 1u, 9) + (t & 7) + 1;
 }
 
-// Pool coordinates (texels, continuous) of position `p` (texels of pooled level p - 1) for a
+// Pool coordinates (texels, continuous) of position `pos` (texels of the pool's level: the
+// grid for pool 0, directional level pool - 1 after; in pool 0 the radiance volumes) for a
 // trilinear lookup: the brick whose 9^3 texels hold both texels of the filter on each axis.
 // w = 0 where that brick is not resident (all eight texels are empty).
 vec4 level_lookup(int pool, vec3 pos) {

@@ -1,7 +1,8 @@
 // Voxel cone tracing, shared by the per-pixel tracer, the bounce pass and the mip view.
 // The including shader declares, before including this file (GiParams is in cone_params.glsl):
 //   uniform GridBlock { VoxelGrid grid; };        uniform GiBlock { GiParams gi; };
-//   uniform sampler3D vox_lod0;                   (full-resolution radiance, RGBA16F)
+//   uniform sampler3D vox_lod0;                   (full-resolution radiance, RGBA16F; bricked,
+//                                                  its pool, 9^3 per brick)
 //   uniform sampler3D aniso[6];                   (+x, -x, +y, -y, +z, -z directional volumes:
 //                                                  their dense levels, bricks.glsl)
 //   layout(r32ui) uniform readonly uimage3D brick_maps[4];
@@ -67,36 +68,13 @@ vec4 sample_anisotropic(vec3 uvw, vec3 dir, float level) {
     return f > 0.0 ? mix(a, anisotropic_level(uvw, dir, l + 1), f) : a;
 }
 
-// One full-resolution texel of the radiance the cones sample; empty outside the grid and
-// where its brick is not resident.
-vec4 full_fetch(ivec3 c) {
-    ivec3 t = full_texel(c);
-    return t.x < 0 ? vec4(0.0) : texelFetch(vox_lod0, t, 0);
-}
-
-// The full-resolution radiance, trilinear: by the sampler when dense, by eight lookups when
-// bricked (its bricks have no apron), through one map lookup when the eight share a brick.
+// The full-resolution radiance, trilinear, one hardware lookup in both layouts: bricked, in
+// the brick whose 9^3 texels (apron included) hold the whole filter, found by one map lookup.
 vec4 sample_full(vec3 uvw) {
     if (!bricked()) return textureLod(vox_lod0, uvw, 0.0);
-    vec3 p = uvw * float(grid.dims.x) - 0.5;
-    ivec3 c = ivec3(floor(p));
-    vec3 f = p - vec3(c);
-    if (all(equal(c >> 3, (c + 1) >> 3)) && all(greaterThanEqual(c, ivec3(0))) &&
-        all(lessThan(c + 1, ivec3(int(grid.dims.x))))) {
-        uint s = brick_slot(0, c >> 3);
-        if (s == 0u) return vec4(0.0);
-        ivec3 t = slot_texel(0, s - 1u, 8) + (c & 7);
-        vec4 y0 = mix(mix(texelFetch(vox_lod0, t, 0), texelFetch(vox_lod0, t + ivec3(1, 0, 0), 0), f.x),
-                      mix(texelFetch(vox_lod0, t + ivec3(0, 1, 0), 0), texelFetch(vox_lod0, t + ivec3(1, 1, 0), 0), f.x), f.y);
-        vec4 y1 = mix(mix(texelFetch(vox_lod0, t + ivec3(0, 0, 1), 0), texelFetch(vox_lod0, t + ivec3(1, 0, 1), 0), f.x),
-                      mix(texelFetch(vox_lod0, t + ivec3(0, 1, 1), 0), texelFetch(vox_lod0, t + ivec3(1, 1, 1), 0), f.x), f.y);
-        return mix(y0, y1, f.z);
-    }
-    vec4 x00 = mix(full_fetch(c), full_fetch(c + ivec3(1, 0, 0)), f.x);
-    vec4 x10 = mix(full_fetch(c + ivec3(0, 1, 0)), full_fetch(c + ivec3(1, 1, 0)), f.x);
-    vec4 x01 = mix(full_fetch(c + ivec3(0, 0, 1)), full_fetch(c + ivec3(1, 0, 1)), f.x);
-    vec4 x11 = mix(full_fetch(c + ivec3(0, 1, 1)), full_fetch(c + ivec3(1, 1, 1)), f.x);
-    return mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z);
+    vec4 p = level_lookup(0, uvw * float(grid.dims.x));
+    if (p.w == 0.0) return vec4(0.0);
+    return textureLod(vox_lod0, p.xyz / vec3(grid.pools[0].xyz * 9u), 0.0);
 }
 
 // Quadrilinear sample at voxel-space position g and level of detail `lod` (log2 of the

@@ -3,12 +3,14 @@
 //! through a map of the grid's bricks (R32_UINT: 0 = not resident, else pool slot + 1).
 //! docs/SPARSE.md says why this layout and not sparse residency, with the measurements.
 //!
-//! Pool 0 holds the full-resolution volumes (albedo, normal, emission, flags, radiance,
-//! bounces): integer lookups only, so a brick is resident when one of its voxels is occupied.
-//! Pools 1.. hold the directional volumes' levels that are larger than [`DENSE_SIDE`]^3:
-//! they are sampled with hardware trilinear filtering, so each brick keeps a one-texel apron
-//! on its low side (9^3 texels: the texels 8b-1 .. 8b+7 of brick b on each axis) and a
-//! brick is resident when any of its 9^3 texels is non-empty. Coarser levels stay dense.
+//! Pool 0 holds the full-resolution volumes (albedo, normal, emission, flags, sums, radiance,
+//! bounces); pools 1.. the directional volumes' levels that are larger than [`DENSE_SIDE`]^3.
+//! Every volume sampled with hardware trilinear filtering (pool 0's radiance volumes, whose
+//! first samples every cone takes, and every pooled directional level) stores each brick with
+//! a one-texel apron on its low side (9^3 texels: the texels 8b-1 .. 8b+7 of brick b on each
+//! axis), so a filter stays inside one brick and costs one map lookup and one fetch; a brick is
+//! resident when any of its 9^3 texels can be non-empty. Pool 0's integer volumes, read texel
+//! by texel, share its slots at 8^3 per slot. Coarser directional levels stay dense.
 //!
 //! The GPU marks bricks while voxelizing and allocates pool slots in a compute pass; the pools
 //! are sized up front by [`BrickLayout::for_scene`], an upper bound from the triangles (a
@@ -37,7 +39,8 @@ pub struct Pool {
     /// Bricks per side of the map: level_side / 8, plus one with the apron (the bricks past
     /// the last texel hold it in their apron).
     pub map_side: u32,
-    /// Texels per side of a stored brick: 8, or 9 with the apron.
+    /// Texels per side of a stored brick in the pool's sampled volumes: 9, with the apron
+    /// (pool 0's integer volumes store 8: [`Pool::extent_at`]).
     pub stride: u32,
     /// Slots the pool holds: an upper bound of the resident bricks.
     pub capacity: u32,
@@ -55,9 +58,14 @@ impl Pool {
         Pool { level_side, map_side, stride: BRICK + u32::from(apron), capacity, slots: [x, x, z] }
     }
 
-    /// Texels per axis of the pool image.
+    /// Texels per axis of the pool's sampled images (radiance, directional levels).
     pub fn extent(&self) -> [u32; 3] {
-        self.slots.map(|s| s * self.stride)
+        self.extent_at(self.stride)
+    }
+
+    /// Texels per axis of an image of the pool that stores `stride`^3 texels per slot.
+    pub fn extent_at(&self, stride: u32) -> [u32; 3] {
+        self.slots.map(|s| s * stride)
     }
 
     /// Texels of the pool image (one volume).
@@ -89,34 +97,27 @@ impl BrickLayout {
         let n = grid.resolution;
         let levels = if cones { Self::pooled_levels(n) } else { 0 };
         let caps = capacity(scene, grid, levels);
-        let mut pools = vec![Pool::new(n, false, caps[0])];
+        let mut pools = vec![Pool::new(n, true, caps[0])];
         for l in 0..levels {
             pools.push(Pool::new((n / 2) >> l, true, caps[l as usize + 1]));
         }
         BrickLayout { pools }
     }
-
-    /// Bytes of the pooled volumes and maps: `full_bytes` per full-resolution texel (all
-    /// its volumes together), 6 RGBA16F directional volumes per directional pool.
-    pub fn bytes(&self, full_bytes: u64) -> u64 {
-        let maps: u64 = self.pools.iter().map(|p| 4 * p.map_entries()).sum();
-        let full = self.pools[0].texels() * full_bytes;
-        let directional: u64 = self.pools[1..].iter().map(|p| 6 * 8 * p.texels()).sum();
-        maps + full + directional
-    }
 }
 
 /// Upper bounds of the resident bricks of each pool: pool 0 (full resolution), then
-/// directional levels 0..levels. A static triangle counts the bricks it touches (the
-/// separating-axis test against each brick box of its bounding box, grown by 1/64 voxel so
-/// that the voxelizer's conservative coverage is inside); a moving one (keyframes), the bricks
-/// of a cube as wide as its enclosing sphere, grown by its largest keyframe scale, wherever
-/// it goes ([`crate::render::voxel::list_capacity`]'s rule). A directional texel is needed by
-/// the brick holding it and by the brick whose apron holds it.
+/// directional levels 0..levels. A static triangle counts the bricks whose 9^3 texels (apron
+/// included) it touches (the separating-axis test against each brick box of its bounding box,
+/// grown by 1/64 voxel so that the voxelizer's conservative coverage is inside); a moving one
+/// (keyframes), the bricks of a cube as wide as its enclosing sphere, grown by its largest
+/// keyframe scale, wherever it goes ([`crate::render::voxel::list_capacity`]'s rule). A
+/// directional texel is needed by the brick holding it and by the brick whose apron holds it.
 pub fn capacity(scene: &Scene, grid: &VoxelGrid, levels: u32) -> Vec<u64> {
     let n = grid.resolution;
     let side0 = n / BRICK;
+    // The occupied bricks (for the directional levels), and pool 0's bricks with their aprons.
     let mut full = vec![false; (side0 as usize).pow(3)];
+    let mut full_apron = vec![false; (side0 as usize + 1).pow(3)];
     let mut moving = vec![0u64; levels as usize + 1];
     let vs = grid.voxel_size.max(f32::MIN_POSITIVE);
     for o in &scene.objects {
@@ -130,29 +131,33 @@ pub fn capacity(scene: &Scene, grid: &VoxelGrid, levels: u32) -> Vec<u64> {
                     let side = crate::render::voxel::swept_cube_side(p, scale) / vs; // voxels
                     for (l, count) in moving.iter_mut().enumerate() {
                         // Texels of this pool's level per voxel, and its bricks per axis.
-                        let texel = if l == 0 { 1.0 } else { (1u32 << l) as f32 };
-                        let bricks = ((side / texel + 2.0) / BRICK as f32).ceil() as u64 + 1;
+                        // Pool 0's apron reaches one voxel further down.
+                        let (texel, apron) = if l == 0 { (1.0, 1.0) } else { ((1u32 << l) as f32, 0.0) };
+                        let bricks = ((side / texel + 2.0 + apron) / BRICK as f32).ceil() as u64 + 1;
                         *count += bricks.pow(3);
                     }
                 } else {
                     let w = p.map(|q| (m.transform_point3(q) - grid.origin) / vs);
-                    mark_triangle_bricks(&mut full, side0, w);
+                    mark_triangle_bricks(&mut full, side0, w, 0);
+                    mark_triangle_bricks(&mut full_apron, side0 + 1, w, 1);
                 }
             }
         }
     }
-    let mut caps = vec![full.iter().filter(|&&b| b).count() as u64 + moving[0]];
+    let mut caps = vec![full_apron.iter().filter(|&&b| b).count() as u64 + moving[0]];
     for l in 0..levels {
         caps.push(directional_bricks(&full, side0, n, l) + moving[l as usize + 1]);
     }
     caps
 }
 
-/// Mark the bricks (of `side`^3) that triangle `w` (voxel units) touches.
-fn mark_triangle_bricks(bricks: &mut [bool], side: u32, w: [Vec3; 3]) {
+/// Mark the bricks (of `side`^3) that triangle `w` (voxel units) touches; with `apron` 1, a
+/// brick b spans voxels 8b - 1 .. 8b + 8 (its apron below it included).
+fn mark_triangle_bricks(bricks: &mut [bool], side: u32, w: [Vec3; 3], apron: u32) {
     let b = BRICK as f32;
+    let a = apron as f32;
     let lo = (w[0].min(w[1]).min(w[2]) / b).floor().max(Vec3::ZERO);
-    let hi = (w[0].max(w[1]).max(w[2]) / b).floor().min(Vec3::splat(side as f32 - 1.0));
+    let hi = ((w[0].max(w[1]).max(w[2]) + a) / b).floor().min(Vec3::splat(side as f32 - 1.0));
     if lo.cmpgt(hi).any() {
         return;
     }
@@ -164,8 +169,8 @@ fn mark_triangle_bricks(bricks: &mut [bool], side: u32, w: [Vec3; 3]) {
                 if bricks[i] {
                     continue;
                 }
-                let centre = (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * b;
-                if triangle_box_overlap(centre, Vec3::splat(b * 0.5 + grow), w) {
+                let centre = (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * b - 0.5 * a;
+                if triangle_box_overlap(centre, Vec3::splat((b + a) * 0.5 + grow), w) {
                     bricks[i] = true;
                 }
             }
@@ -379,7 +384,8 @@ pub struct VoxelMemory {
 pub struct PoolMemory {
     /// Texels per side of the level the pool holds.
     pub level_side: u32,
-    /// Texels per side of a brick in the pool (8, or 9 with the filtering apron).
+    /// Texels per side of a brick in the pool's sampled volumes (9, with the filtering apron;
+    /// pool 0's integer volumes store 8).
     pub brick_stride: u32,
     /// Bricks resident after the last frame.
     pub resident: u32,
@@ -410,11 +416,14 @@ impl VoxelMemory {
             mib(self.dense_bytes)
         )];
         lines.extend(self.pools.iter().enumerate().map(|(i, p)| {
-            let what = if i == 0 { "full resolution".to_string() } else { format!("directional level {}", i - 1) };
+            let (what, per_brick) = if i == 0 {
+                ("full resolution".to_string(), format!("{BRICK}³ per brick, {}³ with the radiance apron", p.brick_stride))
+            } else {
+                (format!("directional level {}", i - 1), format!("{}³ per brick", p.brick_stride))
+            };
             format!(
-                "bricks, {what} ({}³ texels, {}³ per brick): {} resident of {} slots, {} bricks in the grid ({:.2}%); pool {:.2} MiB",
+                "bricks, {what} ({}³ texels, {per_brick}): {} resident of {} slots, {} bricks in the grid ({:.2}%); pool {:.2} MiB",
                 p.level_side,
-                p.brick_stride,
                 p.resident,
                 p.capacity,
                 p.grid_bricks,
@@ -444,12 +453,14 @@ impl BrickSnapshot {
     }
 }
 
-/// The dense texels (`texel` bytes each, x fastest) of a pool's level, from the pool image's
-/// bytes and its map: each resident brick's interior copied out, the rest zero.
-pub fn unpool(pool: &Pool, pooled: &[u8], map: &[u32], texel: usize) -> Vec<u8> {
+/// The dense texels (`texel` bytes each, x fastest) of a pool's level, from the bytes of a pool
+/// image that stores `stride`^3 texels per slot (8, or 9 with the apron) and the pool's map:
+/// each resident brick's interior copied out, the rest zero.
+pub fn unpool(pool: &Pool, stride: u32, pooled: &[u8], map: &[u32], texel: usize) -> Vec<u8> {
     let side = pool.level_side as usize;
-    let ext = pool.extent().map(|e| e as usize);
-    let apron = (pool.stride - BRICK) as usize;
+    let ext = pool.extent_at(stride).map(|e| e as usize);
+    let apron = (stride - BRICK) as usize;
+    let stride = stride as usize;
     let mut out = vec![0u8; side * side * side * texel];
     let m = pool.map_side as usize;
     for (i, &entry) in map.iter().enumerate().filter(|(_, &e)| e != 0 && e != u32::MAX) {
@@ -468,11 +479,9 @@ pub fn unpool(pool: &Pool, pooled: &[u8], map: &[u32], texel: usize) -> Vec<u8> 
                         continue;
                     }
                     let p = [x, y, z].map(|c| c + apron);
-                    let src =
-                        ((slot[2] * pool.stride as usize + p[2]) * ext[1] + slot[1] * pool.stride as usize + p[1])
-                            * ext[0]
-                            + slot[0] * pool.stride as usize
-                            + p[0];
+                    let src = ((slot[2] * stride + p[2]) * ext[1] + slot[1] * stride + p[1]) * ext[0]
+                        + slot[0] * stride
+                        + p[0];
                     let dst = (t[2] * side + t[1]) * side + t[0];
                     out[dst * texel..(dst + 1) * texel].copy_from_slice(&pooled[src * texel..(src + 1) * texel]);
                 }
@@ -526,7 +535,7 @@ mod tests {
         let mut bricks = vec![false; 64];
         // A horizontal triangle at y = 4 (inside brick row 0) over x, z in [1, 20].
         let v = Vec3::new;
-        mark_triangle_bricks(&mut bricks, side, [v(1.0, 4.0, 1.0), v(20.0, 4.0, 1.0), v(1.0, 4.0, 20.0)]);
+        mark_triangle_bricks(&mut bricks, side, [v(1.0, 4.0, 1.0), v(20.0, 4.0, 1.0), v(1.0, 4.0, 20.0)], 0);
         let marked: Vec<usize> = (0..64).filter(|&i| bricks[i]).collect();
         // x, z bricks 0..2 below the diagonal x + z <= 21: (0,0) (1,0) (2,0) (0,1) (1,1) (0,2)
         // (brick (2,1) starts at x = 16, z = 8: 24 > 21; (1,2): x = 8, z = 16: 24 > 21).
@@ -537,5 +546,24 @@ mod tests {
         let mut expect = expect;
         expect.sort();
         assert_eq!(marked, expect);
+    }
+
+    #[test]
+    fn a_brick_with_an_apron_is_marked_by_the_last_voxels_of_the_brick_below() {
+        // A 32^3 grid; pool 0's map has 4 + 1 bricks per side. A wall in the plane x = 7.5
+        // fills voxels x = 7, the last of brick 0 along x: brick 1's apron holds them.
+        let v = Vec3::new;
+        let wall = [v(7.5, 1.0, 1.0), v(7.5, 6.0, 1.0), v(7.5, 1.0, 6.0)];
+        let mut plain = vec![false; 64];
+        mark_triangle_bricks(&mut plain, 4, wall, 0);
+        assert_eq!(plain.iter().filter(|&&b| b).count(), 1);
+        let mut apron = vec![false; 125];
+        mark_triangle_bricks(&mut apron, 5, wall, 1);
+        let marked: Vec<usize> = (0..125).filter(|&i| apron[i]).collect();
+        assert_eq!(marked, vec![0, 1], "brick (0, 0, 0) and the one above it along x");
+        // At x = 4.5 (voxel 4, inside brick 0) no apron holds it.
+        let mut apron = vec![false; 125];
+        mark_triangle_bricks(&mut apron, 5, [v(4.5, 1.0, 1.0), v(4.5, 6.0, 1.0), v(4.5, 1.0, 6.0)], 1);
+        assert_eq!((0..125).filter(|&i| apron[i]).collect::<Vec<_>>(), vec![0]);
     }
 }

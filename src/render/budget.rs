@@ -294,11 +294,13 @@ fn voxel_allocations(scene: &Scene, layout: VoxelLayout) -> Vec<Alloc> {
     let res = s.gi.voxel_resolution;
     let grid = VoxelGrid::for_scene(scene);
     let layout = (layout == VoxelLayout::Bricks).then(|| BrickLayout::for_scene(scene, &grid, needs.cones));
-    // Each full-resolution volume: N^3, or its pool of bricks.
-    let full = layout.as_ref().map_or([res; 3], |l| l.pools[0].extent());
+    // Each full-resolution volume: N^3, or its pool of bricks (8^3 per slot; the radiance
+    // volumes 9^3, with their apron).
+    let full = layout.as_ref().map_or([res; 3], |l| l.pools[0].extent_at(bricks::BRICK));
     let volume = |format, sampled| Alloc::volume(format, full, 1, sampled);
     let rgba16 = F::R16G16B16A16_SFLOAT;
-    let mut vols = vec![volume(F::R32_UINT, false), volume(F::R32_UINT, false), volume(rgba16, true)];
+    let radiance = Alloc::volume(rgba16, layout.as_ref().map_or([res; 3], |l| l.pools[0].extent()), 1, true);
+    let mut vols = vec![volume(F::R32_UINT, false), volume(F::R32_UINT, false), radiance];
     if needs.emission {
         vols.push(volume(F::R32_UINT, false));
     }
@@ -310,7 +312,7 @@ fn voxel_allocations(scene: &Scene, layout: VoxelLayout) -> Vec<Alloc> {
         vols.push(volume(F::R8_UINT, false));
     }
     if needs.bounces > 0 {
-        vols.extend([volume(rgba16, true), volume(rgba16, true)]); // bounced radiance, the bounce's scratch
+        vols.extend([radiance, radiance]); // bounced radiance, the bounce's scratch
     }
     let pooled = layout.as_ref().map_or(0, |l| l.pools.len() as u32 - 1);
     if let Some(l) = &layout {

@@ -377,7 +377,10 @@ impl Renderer {
         let pooled = self.download(image)?;
         let map: Vec<u32> = bytemuck::pod_collect_to_vec(&self.download(&b.maps[pool])?);
         let texel = pooled.len() / image.desc.texel_count() as usize;
-        Ok(bricks::unpool(&b.layout.pools[pool], &pooled, &map, texel))
+        // Pool 0's integer volumes store 8^3 texels per slot, its radiance volumes 9^3.
+        let p = &b.layout.pools[pool];
+        let stride = image.desc.extent.width / p.slots[0];
+        Ok(bricks::unpool(p, stride, &pooled, &map, texel))
     }
 
     /// Read the resident bricks of every pool back (waits; after a frame, never inside one).

@@ -3,7 +3,7 @@
 //! boundary are not on the grid's faces). Volumes are created only when the scene needs them.
 
 use crate::gpu::{Access, Bind, Buffer, Context, GpuError, GpuResult, Image, ImageDesc, Sampler};
-use crate::render::bricks::{BrickLayout, Bricks, MAX_POOLS};
+use crate::render::bricks::{BrickLayout, Bricks, BRICK, MAX_POOLS};
 use crate::render::cones::GpuGiParams;
 use crate::render::graph::Use;
 use crate::scene::{Aabb, GiMode, GiSettings, Scene, View, VoxelLayout};
@@ -345,10 +345,15 @@ impl VoxelVolumes {
         let bricks = (scene.settings.gi.voxel_layout == VoxelLayout::Bricks)
             .then(|| Bricks::new(ctx, BrickLayout::for_scene(scene, &grid, needs.cones)))
             .transpose()?;
-        // Full-resolution volumes: N^3, or the pool of their resident bricks.
-        let full_extent = bricks.as_ref().map_or([res; 3], |b| b.layout.pools[0].extent());
+        // Full-resolution volumes: N^3, or the pool of their resident bricks (the integer
+        // volumes 8^3 per slot, the sampled radiance volumes 9^3 with their apron).
+        let extent = |stride| bricks.as_ref().map_or([res; 3], |b| b.layout.pools[0].extent_at(stride));
         let volume = |name: &str, format, usage| {
-            Image::new(ctx, name, ImageDesc::d3_extent(format, full_extent, usage)).map(Arc::new)
+            Image::new(ctx, name, ImageDesc::d3_extent(format, extent(BRICK), usage)).map(Arc::new)
+        };
+        let radiance_volume = |name: &str| {
+            let desc = ImageDesc::d3_extent(RADIANCE_VOLUME_FORMAT, extent(BRICK + 1), sampled);
+            Image::new(ctx, name, desc).map(Arc::new)
         };
         let mip_levels = res.trailing_zeros(); // half resolution down to 1 voxel
         let pooled = bricks.as_ref().map_or(0, |b| b.layout.pools.len() as u32 - 1);
@@ -357,7 +362,7 @@ impl VoxelVolumes {
         let bounced = if needs.bounces > 0 {
             ["voxel radiance bounced", "voxel bounce scratch"]
                 .iter()
-                .map(|name| volume(name, RADIANCE_VOLUME_FORMAT, sampled))
+                .map(|name| radiance_volume(name))
                 .collect::<GpuResult<Vec<_>>>()?
         } else {
             Vec::new()
@@ -388,7 +393,7 @@ impl VoxelVolumes {
             needs,
             grid_buffer,
             albedo: volume("voxel albedo", vk::Format::R32_UINT, usage)?,
-            radiance: volume("voxel radiance", RADIANCE_VOLUME_FORMAT, sampled)?,
+            radiance: radiance_volume("voxel radiance")?,
             bounced,
             directional,
             gi_params,
