@@ -45,6 +45,6 @@ void main() {
     vec3 n_avg = unpack_rgb_count(imageLoad(vox_normal, t).r).rgb / 255.0 * 2.0 - 1.0;
     vec3 N = safe_normalize(n_avg, vec3(0.0, 1.0, 0.0));
     vec4 d = trace_diffuse(ConeOrigin(vec3(c) + 0.5, N, 0.5));
-    // The scratch volume is read texel by texel (voxel_bounce_compose.comp): no apron copies.
-    imageStore(vox_indirect, radiance_texel(c), vec4(min(albedo * d.rgb, vec3(HALF_MAX)), 1.0));
+    // The scratch volume is read texel by texel (voxel_bounce_compose.comp): 8^3 per slot.
+    imageStore(vox_indirect, t, vec4(min(albedo * d.rgb, vec3(HALF_MAX)), 1.0));
 }

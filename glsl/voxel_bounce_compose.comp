@@ -21,8 +21,9 @@ void main() {
     uint entry = list_invocation();
     if (entry >= vlist.occupied.count) return;
     ivec3 c = unpack_voxel(vlist.entries[entry]);
-    ivec3 t = radiance_texel(c);
+    ivec3 t = full_texel(c);
     if (t.x < 0) return;
-    vec3 sum = imageLoad(vox_direct, t).rgb + imageLoad(vox_indirect, t).rgb;
+    // The direct radiance is sampled by cones (9^3 per slot), the scratch volume is not (8^3).
+    vec3 sum = imageLoad(vox_direct, radiance_texel(c)).rgb + imageLoad(vox_indirect, t).rgb;
     RADIANCE_STORE(vox_bounced, c, vec4(min(sum, vec3(HALF_MAX)), 1.0));
 }

@@ -155,7 +155,7 @@ fn info_describes_the_bricked_voxel_layout() {
     // 256^3 pools the full resolution and the directional level 0 (128^3 > 64^3).
     let pools: Vec<&str> = out.lines().filter(|l| l.starts_with("  bricks, ")).collect();
     assert_eq!(pools.len(), 2, "{out}");
-    assert!(pools[0].contains("full resolution (256³ texels, 8³ per brick)"), "{out}");
+    assert!(pools[0].contains("full resolution (256³ texels, 8³ per brick, 9³ with the radiance apron)"), "{out}");
     assert!(pools[1].contains("directional level 0 (128³ texels, 9³ per brick)"), "{out}");
     for p in pools {
         // "N resident of C slots, M bricks in the grid": 0 < N <= C < M.

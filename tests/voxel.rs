@@ -920,6 +920,71 @@ fn bricked_and_dense_layouts_agree_after_dynamic_objects_move() {
     assert_no_validation_messages(&ctx);
 }
 
+/// Pool 0's radiance volumes store each brick with an apron (its low neighbours' last texels),
+/// written by every radiance writer (`RADIANCE_STORE`): after moving objects have been
+/// revoxelized, relit and bounced, every apron texel of every resident brick holds exactly
+/// what the voxel it copies holds (zero where that voxel's brick is not resident or is outside
+/// the grid), in the direct and the bounced radiance.
+#[test]
+fn every_radiance_apron_holds_the_texels_of_the_bricks_below() {
+    let ctx = context();
+    let s = common::load(
+        &repo().join("scenes/dynamic-test.toml"),
+        &[
+            ("render.width", "16"),
+            ("render.height", "16"),
+            ("gi.voxel_resolution", "64"),
+            ("gi.voxel_layout", "\"bricks\""),
+        ],
+    );
+    let mut r = Renderer::new(&ctx, s).unwrap();
+    for t in [0.0, 1.0, 2.5] {
+        r.request_voxel_update();
+        r.render(t, false).unwrap();
+    }
+    let v = r.voxels().expect("voxels");
+    let (n, bricks) = (v.grid.resolution as i64, v.bricks.as_ref().expect("bricks"));
+    let (pool, map_image) = (bricks.layout.pools[0], bricks.maps[0].clone());
+    let volumes = [v.radiance.clone(), v.bounced[0].clone()];
+    let map: Vec<u32> = bytemuck::pod_collect_to_vec(&r.download(&map_image).unwrap());
+    let m = pool.map_side as i64;
+    assert_eq!((m, pool.stride), (n / 8 + 1, 9));
+    for img in volumes {
+        let dense = f16_volume(&mut r, &img);
+        let pooled = f16_rgba(&r.download(&img).unwrap());
+        let ext = pool.extent().map(|e| e as i64);
+        let (mut checked, mut nonzero) = (0, 0);
+        for (i, &entry) in map.iter().enumerate().filter(|(_, &e)| e != 0) {
+            let b = [i as i64 % m, (i as i64 / m) % m, i as i64 / (m * m)];
+            let s = entry as i64 - 1;
+            let slot = [
+                s % pool.slots[0] as i64,
+                (s / pool.slots[0] as i64) % pool.slots[1] as i64,
+                s / (pool.slots[0] * pool.slots[1]) as i64,
+            ];
+            for (z, y, x) in (0..9).flat_map(|z| (0..9).flat_map(move |y| (0..9).map(move |x| (z, y, x)))) {
+                if x != 0 && y != 0 && z != 0 {
+                    continue; // the interior
+                }
+                let c = [b[0] * 8 - 1 + x, b[1] * 8 - 1 + y, b[2] * 8 - 1 + z];
+                let want = if c.iter().all(|&k| (0..n).contains(&k)) {
+                    dense[((c[2] * n + c[1]) * n + c[0]) as usize]
+                } else {
+                    [0.0; 4]
+                };
+                let p = [slot[0] * 9 + x, slot[1] * 9 + y, slot[2] * 9 + z];
+                let got = pooled[((p[2] * ext[1] + p[1]) * ext[0] + p[0]) as usize];
+                assert_eq!(got, want, "{}: brick {b:?}, apron texel of voxel {c:?}", img.name);
+                checked += 1;
+                nonzero += usize::from(want != [0.0; 4]);
+            }
+        }
+        eprintln!("{}: {checked} apron texels, {nonzero} non-zero", img.name);
+        assert!(nonzero > 100, "{}: the aprons hold the surfaces' radiance ({nonzero} texels)", img.name);
+    }
+    assert_no_validation_messages(&ctx);
+}
+
 /// The bricked layout's image against the dense one's: FLIP at most 0.005 and the mean
 /// radiance within 0.5%.
 fn assert_same_image(label: &str, bricks: &dvsgi::metrics::LinearImage, dense: &dvsgi::metrics::LinearImage) {

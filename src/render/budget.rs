@@ -312,7 +312,7 @@ fn voxel_allocations(scene: &Scene, layout: VoxelLayout) -> Vec<Alloc> {
         vols.push(volume(F::R8_UINT, false));
     }
     if needs.bounces > 0 {
-        vols.extend([radiance, radiance]); // bounced radiance, the bounce's scratch
+        vols.extend([radiance, volume(rgba16, false)]); // bounced radiance, the bounce's scratch
     }
     let pooled = layout.as_ref().map_or(0, |l| l.pools.len() as u32 - 1);
     if let Some(l) = &layout {

@@ -358,12 +358,13 @@ impl VoxelVolumes {
         let mip_levels = res.trailing_zeros(); // half resolution down to 1 voxel
         let pooled = bricks.as_ref().map_or(0, |b| b.layout.pools.len() as u32 - 1);
         let directional = if needs.cones { directional_volumes(ctx, res, pooled, sampled)? } else { Vec::new() };
-        // The bounced radiance and the scratch volume each bounce writes before it is copied in.
+        // The bounced radiance and the scratch volume each bounce writes before it is copied in
+        // (read texel by texel: no apron).
         let bounced = if needs.bounces > 0 {
-            ["voxel radiance bounced", "voxel bounce scratch"]
-                .iter()
-                .map(|name| radiance_volume(name))
-                .collect::<GpuResult<Vec<_>>>()?
+            vec![
+                radiance_volume("voxel radiance bounced")?,
+                volume("voxel bounce scratch", RADIANCE_VOLUME_FORMAT, usage)?,
+            ]
         } else {
             Vec::new()
         };

@@ -171,9 +171,10 @@ impl BrickClearPass {
         let Some(bricks) = &volumes.bricks else { return Ok(None) };
         let v = volumes;
         let words = [&v.albedo, &v.normal, v.emission_or_albedo()].map(|i| i.view).to_vec();
-        // The radiance, then the bounced radiance and the bounce scratch where they exist.
-        let radiance = [0, 1].map(|k| v.bounced.get(k).unwrap_or(&v.radiance).view);
-        let radiance = std::iter::once(v.radiance.view).chain(radiance).collect::<Vec<_>>();
+        // The sampled radiance volumes (9^3 per slot): the radiance, then the bounced radiance
+        // where it exists; the bounce's scratch (8^3 per slot) where it exists.
+        let radiance = vec![v.radiance.view, v.bounced.first().unwrap_or(&v.radiance).view];
+        let scratch = v.bounced.get(1);
         let clears = (0..bricks.layout.pools.len())
             .map(|p| {
                 let faces = (0..6)
@@ -186,11 +187,12 @@ impl BrickClearPass {
                     Bind::StorageImageArray(words.clone()),
                     Bind::StorageImageArray(radiance.clone()),
                     Bind::StorageImageArray(faces),
+                    Bind::StorageImage(scratch.unwrap_or(&v.pool_placeholder).view),
                 ];
                 let set = DescriptorSet::new(ctx, "voxel brick clear", vk::ShaderStageFlags::COMPUTE, &binds)?;
                 let name = format!("voxel brick clear {p}");
-                let pipeline =
-                    Pipeline::compute(ctx, &name, shaders::BRICK_CLEAR_COMP, &[set.layout], 0, &[(0, p as u32)])?;
+                let constants = [(0, p as u32), (1, u32::from(scratch.is_some()))];
+                let pipeline = Pipeline::compute(ctx, &name, shaders::BRICK_CLEAR_COMP, &[set.layout], 0, &constants)?;
                 Ok((pipeline, set))
             })
             .collect::<GpuResult<Vec<_>>>()?;
