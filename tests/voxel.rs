@@ -425,11 +425,18 @@ fn dynamic_update_clears_old_voxels_and_keeps_static_ones() {
         checked += 1;
     }
     assert!(checked > 500, "checked {checked} static voxels");
-    // Resident bricks: the bricks of the occupied voxels, before and after the move (the
-    // bricks the blob left are released, those it reached made resident). Within the CPU
-    // model's bricks, and none dropped.
-    let bricks_of =
-        |set: &BTreeSet<Voxel>| -> BTreeSet<Voxel> { set.iter().map(|&(i, j, k)| (i / 8, j / 8, k / 8)).collect() };
+    // Resident bricks: the bricks of the occupied voxels and those whose aprons hold one (a
+    // voxel that is the last of its brick on an axis is also in the apron of the brick above),
+    // before and after the move (the bricks the blob left are released, those it reached made
+    // resident). Within the CPU model's bricks, and none dropped.
+    let bricks_of = |set: &BTreeSet<Voxel>| -> BTreeSet<Voxel> {
+        let span = |c: u32| c / 8..=(c + 1) / 8;
+        set.iter()
+            .flat_map(|&(i, j, k)| {
+                span(k).flat_map(move |z| span(j).flat_map(move |y| span(i).map(move |x| (x, y, z))))
+            })
+            .collect()
+    };
     let resident = |b: &dvsgi::render::bricks::BrickSnapshot| -> BTreeSet<Voxel> {
         assert_eq!((b.pools.len(), b.pools[0].dropped), (1, 0), "one pool at {RES}^3, nothing dropped");
         b.pools[0].resident.iter().map(|c| (c[0], c[1], c[2])).collect()

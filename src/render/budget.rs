@@ -377,11 +377,14 @@ mod tests {
         let v = Estimate::of(&scene).volumes as f64 / (1u64 << 30) as f64;
         assert!((v - 8.358).abs() < 0.01, "{v} GiB");
         // Bricked, an empty scene holds one slot per pool (the pools' minimum), the maps
-        // (64^3 + 33^3 + 17^3 entries at 512^3), the lists and the dense directional levels
-        // of at most 64^3: a few MiB.
+        // (65^3 + 33^3 + 17^3 entries at 512^3: each pool's aprons need a brick past its last
+        // texel), the dense directional levels of at most 64^3 (six RGBA16F chains), and under
+        // 2 MiB of lists, slots and the scan buffer.
         scene.settings.gi.voxel_layout = VoxelLayout::Bricks;
         let bricked = Estimate::of(&scene).volumes;
-        assert!(bricked > 4 * 64u64.pow(3) && bricked < 16 << 20, "{bricked} bytes");
+        let maps = 4 * (65u64.pow(3) + 33u64.pow(3) + 17u64.pow(3));
+        let dense_levels = 6 * 8 * (0..7).map(|l| (64u64 >> l).pow(3)).sum::<u64>();
+        assert!(bricked > maps + dense_levels && bricked < maps + dense_levels + (2 << 20), "{bricked} bytes");
     }
 
     #[test]
