@@ -68,11 +68,6 @@ impl Pool {
         self.slots.map(|s| s * stride)
     }
 
-    /// Texels of the pool image (one volume).
-    pub fn texels(&self) -> u64 {
-        self.extent().iter().map(|&e| u64::from(e)).product()
-    }
-
     /// Bricks of the grid at this level (the map's entries).
     pub fn map_entries(&self) -> u64 {
         u64::from(self.map_side).pow(3)
