@@ -233,11 +233,25 @@ fn check_image_limits(ctx: &Context, name: &str, desc: &ImageDesc) -> GpuResult<
 
 /// The image object of `desc` (optimal tiling, one sample, exclusive, UNDEFINED), no memory yet.
 fn create_image(ctx: &Context, desc: &ImageDesc) -> GpuResult<vk::Image> {
+    unsafe { ctx.device.create_image(&image_info(desc), None) }.vk("vkCreateImage")
+}
+
+/// The bytes `ctx`'s device asks for an image of `desc`, its padding and alignment included
+/// (vkGetDeviceImageMemoryRequirements, maintenance4: no image is created).
+pub fn device_image_bytes(ctx: &Context, desc: &ImageDesc) -> u64 {
+    let info = image_info(desc);
+    let query = vk::DeviceImageMemoryRequirements::default().create_info(&info);
+    let mut req = vk::MemoryRequirements2::default();
+    unsafe { ctx.device.get_device_image_memory_requirements(&query, &mut req) };
+    req.memory_requirements.size
+}
+
+fn image_info(desc: &ImageDesc) -> vk::ImageCreateInfo<'static> {
     let image_type = match desc.kind {
         ImageKind::D3 => vk::ImageType::TYPE_3D,
         _ => vk::ImageType::TYPE_2D,
     };
-    let info = vk::ImageCreateInfo::default()
+    vk::ImageCreateInfo::default()
         .image_type(image_type)
         .format(desc.format)
         .extent(desc.extent)
@@ -247,8 +261,7 @@ fn create_image(ctx: &Context, desc: &ImageDesc) -> GpuResult<vk::Image> {
         .tiling(vk::ImageTiling::OPTIMAL)
         .usage(desc.usage)
         .sharing_mode(vk::SharingMode::EXCLUSIVE)
-        .initial_layout(vk::ImageLayout::UNDEFINED);
-    unsafe { ctx.device.create_image(&info, None) }.vk("vkCreateImage")
+        .initial_layout(vk::ImageLayout::UNDEFINED)
 }
 
 /// Device-local memory for image `raw` (checked against the device's limits first); on failure

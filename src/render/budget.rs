@@ -6,7 +6,7 @@
 use crate::gpu::{Context, GpuError, GpuResult};
 use crate::render::bricks::{self, BrickLayout};
 use crate::render::frame::cone_shadows;
-use crate::render::voxel::{list_capacity, VoxelGrid, VoxelNeeds};
+use crate::render::voxel::{list_capacity, volume_bytes, VoxelGrid, VoxelNeeds};
 use crate::scene::{GiMode, Scene, View, VoxelLayout};
 use ash::vk;
 
@@ -96,7 +96,7 @@ impl Estimate {
             }
         }
         if s.gi.mode == GiMode::Vct || voxel_view {
-            let vols: Vec<u64> = voxel_allocations(scene, layout).iter().map(bytes).collect();
+            let vols: Vec<u64> = voxel_allocations(scene, layout, bytes).iter().map(bytes).collect();
             if VoxelNeeds::of(scene).cones && !voxel_view {
                 let specular =
                     s.gi.specular != crate::scene::SpecularSource::Off && scene.materials.iter().any(|m| m.is_glossy());
@@ -249,51 +249,33 @@ impl Alloc {
     fn texel_bytes(&self) -> u64 {
         match *self {
             Alloc::Buffer(bytes) => bytes,
-            Alloc::Volume { format, extent, mips, .. } => {
-                let level = |l: u32| extent.iter().map(|&e| u64::from((e >> l).max(1))).product::<u64>();
-                (0..mips).map(level).sum::<u64>() * crate::render::passes::readback::bytes_per_texel(format)
-            }
+            Alloc::Volume { format, extent, mips, sampled } => volume_bytes(None, format, extent, mips, sampled),
         }
     }
 
-    /// Bytes on `ctx`'s device: an image's memory requirements as the device states them
-    /// (vkGetDeviceImageMemoryRequirements, maintenance4: no image is created), so padding
-    /// and alignment count (NVIDIA pads 3D images: 9% over the texels for the brick pools).
+    /// Bytes on `ctx`'s device: an image's memory requirements as the device states them, so
+    /// padding and alignment count (NVIDIA pads 3D images: 12-23% over the texels for the
+    /// brick pools).
     fn device_bytes(&self, ctx: &Context) -> u64 {
         let Alloc::Volume { format, extent, mips, sampled } = *self else { return self.texel_bytes() };
-        let mut usage =
-            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC;
-        if sampled {
-            usage |= vk::ImageUsageFlags::SAMPLED;
-        }
-        let info = vk::ImageCreateInfo::default()
-            .image_type(vk::ImageType::TYPE_3D)
-            .format(format)
-            .extent(vk::Extent3D { width: extent[0], height: extent[1], depth: extent[2] })
-            .mip_levels(mips)
-            .array_layers(1)
-            .samples(vk::SampleCountFlags::TYPE_1)
-            .tiling(vk::ImageTiling::OPTIMAL)
-            .usage(usage)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE)
-            .initial_layout(vk::ImageLayout::UNDEFINED);
-        let query = vk::DeviceImageMemoryRequirements::default().create_info(&info);
-        let mut req = vk::MemoryRequirements2::default();
-        unsafe { ctx.device.get_device_image_memory_requirements(&query, &mut req) };
-        req.memory_requirements.size.max(self.texel_bytes())
+        volume_bytes(Some(ctx), format, extent, mips, sampled)
     }
 }
 
 /// Each allocation of the voxel volumes (`VoxelVolumes::new`): the full-resolution volumes
 /// (N^3, or pools of bricks), the maps, lists and pooled directional levels of the bricked
 /// layout, the work lists, the dense directional mip chains and the placeholders.
-fn voxel_allocations(scene: &Scene, layout: VoxelLayout) -> Vec<Alloc> {
+fn voxel_allocations(scene: &Scene, layout: VoxelLayout, bytes: &dyn Fn(&Alloc) -> u64) -> Vec<Alloc> {
     use vk::Format as F;
     let s = &scene.settings;
     let needs = VoxelNeeds::of(scene);
     let res = s.gi.voxel_resolution;
     let grid = VoxelGrid::for_scene(scene);
-    let layout = (layout == VoxelLayout::Bricks).then(|| BrickLayout::for_scene(scene, &grid, needs.cones));
+    // The pools' slots arranged as `VoxelVolumes::new` arranges them, by the same bytes.
+    let layout = (layout == VoxelLayout::Bricks).then(|| {
+        let image_bytes = |f, e, sampled| bytes(&Alloc::volume(f, e, 1, sampled));
+        BrickLayout::for_scene(scene, &grid, needs.cones).fit(needs.full_images(), &image_bytes)
+    });
     // Each full-resolution volume: N^3, or its pool of bricks (8^3 per slot; the radiance
     // volumes 9^3, with their apron).
     let full = layout.as_ref().map_or([res; 3], |l| l.pools[0].extent_at(bricks::BRICK));

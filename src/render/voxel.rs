@@ -3,7 +3,7 @@
 //! boundary are not on the grid's faces). Volumes are created only when the scene needs them.
 
 use crate::gpu::{Access, Bind, Buffer, Context, GpuError, GpuResult, Image, ImageDesc, Sampler};
-use crate::render::bricks::{BrickLayout, Bricks, BRICK, MAX_POOLS};
+use crate::render::bricks::{BrickLayout, Bricks, FullImages, BRICK, MAX_POOLS};
 use crate::render::cones::GpuGiParams;
 use crate::render::graph::Use;
 use crate::scene::{Aabb, GiMode, GiSettings, Scene, View, VoxelLayout};
@@ -72,6 +72,14 @@ pub struct VoxelNeeds {
 }
 
 impl VoxelNeeds {
+    /// Pool 0's images besides the sampled radiance (what its slot arrangement weighs):
+    /// albedo, normal, emission and the sums (R32_UINT), the static flags (R8_UINT), the
+    /// bounce's scratch volume.
+    pub fn full_images(&self) -> FullImages {
+        let words = 2 + u32::from(self.emission) + sum_words(self.emission) as u32;
+        FullImages { words, bytes: u32::from(self.dynamic), scratch: self.bounces > 0 }
+    }
+
     pub fn of(scene: &Scene) -> VoxelNeeds {
         let s = &scene.settings;
         let cones = match s.view {
@@ -342,8 +350,15 @@ impl VoxelVolumes {
         let usage =
             vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC;
         let sampled = usage | vk::ImageUsageFlags::SAMPLED;
+        // The pools' slots arranged to take the least of this device's memory.
+        let image_bytes = |f, e, sampled| volume_bytes(Some(ctx), f, e, 1, sampled);
         let bricks = (scene.settings.gi.voxel_layout == VoxelLayout::Bricks)
-            .then(|| Bricks::new(ctx, BrickLayout::for_scene(scene, &grid, needs.cones)))
+            .then(|| {
+                Bricks::new(
+                    ctx,
+                    BrickLayout::for_scene(scene, &grid, needs.cones).fit(needs.full_images(), &image_bytes),
+                )
+            })
             .transpose()?;
         // Full-resolution volumes: N^3, or the pool of their resident bricks (the integer
         // volumes 8^3 per slot, the sampled radiance volumes 9^3 with their apron).
@@ -685,6 +700,22 @@ fn directional_volumes(
             Image::new(ctx, &format!("voxel radiance {d}"), desc).map(Arc::new)
         })
         .collect()
+}
+
+/// Bytes of a voxel volume (`mips` levels of `extent` texels; `sampled`: also sampled, not only
+/// a storage image): by its texels, or on `ctx`'s device as the device states them
+/// (vkGetDeviceImageMemoryRequirements: its padding and alignment), never less than the texels.
+pub fn volume_bytes(ctx: Option<&Context>, format: vk::Format, extent: [u32; 3], mips: u32, sampled: bool) -> u64 {
+    let level = |l: u32| extent.iter().map(|&e| u64::from((e >> l).max(1))).product::<u64>();
+    let texels = (0..mips).map(level).sum::<u64>() * crate::render::passes::readback::bytes_per_texel(format);
+    let Some(ctx) = ctx else { return texels };
+    let mut usage =
+        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC;
+    if sampled {
+        usage |= vk::ImageUsageFlags::SAMPLED;
+    }
+    let desc = ImageDesc { mip_levels: mips, ..ImageDesc::d3_extent(format, extent, usage) };
+    crate::gpu::memory::device_image_bytes(ctx, &desc).max(texels)
 }
 
 /// The scan buffer ([`ScanLayout`]) for a grid of `res` and its pools of bricks, if any.
