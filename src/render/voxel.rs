@@ -24,6 +24,20 @@ pub struct GpuVoxelGrid {
     pub pools: [[u32; 4]; MAX_POOLS],
 }
 
+impl GpuVoxelGrid {
+    /// The uniform for `grid` in its layout (`bricks`: its pools), with the voxelization's
+    /// fixed-point one and the emission and radiance scales.
+    fn new(grid: &VoxelGrid, bricks: Option<&Bricks>, sum_scale: u32, [emission, radiance]: [f32; 2]) -> Self {
+        let pooled = bricks.map_or(0, |b| b.layout.pools.len() as u32 - 1);
+        GpuVoxelGrid {
+            origin: [grid.origin.x, grid.origin.y, grid.origin.z, grid.voxel_size],
+            dims: [grid.resolution, pooled, u32::from(bricks.is_some()), sum_scale],
+            params: [emission, radiance, 1.0 / radiance, 0.0],
+            pools: pool_uniforms(bricks),
+        }
+    }
+}
+
 /// Placement of the cubic grid in world space.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VoxelGrid {
@@ -350,16 +364,7 @@ impl VoxelVolumes {
         let usage =
             vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC;
         let sampled = usage | vk::ImageUsageFlags::SAMPLED;
-        // The pools' slots arranged to take the least of this device's memory.
-        let image_bytes = |f, e, sampled| volume_bytes(Some(ctx), f, e, 1, sampled);
-        let bricks = (scene.settings.gi.voxel_layout == VoxelLayout::Bricks)
-            .then(|| {
-                Bricks::new(
-                    ctx,
-                    BrickLayout::for_scene(scene, &grid, needs.cones).fit(needs.full_images(), &image_bytes),
-                )
-            })
-            .transpose()?;
+        let bricks = bricks_on(ctx, scene, &grid, &needs)?;
         // Full-resolution volumes: N^3, or the pool of their resident bricks (the integer
         // volumes 8^3 per slot, the sampled radiance volumes 9^3 with their apron).
         let extent = |stride| bricks.as_ref().map_or([res; 3], |b| b.layout.pools[0].extent_at(stride));
@@ -390,12 +395,7 @@ impl VoxelVolumes {
         let grid_buffer = Buffer::uniform(
             ctx,
             "voxel grid",
-            &GpuVoxelGrid {
-                origin: [grid.origin.x, grid.origin.y, grid.origin.z, grid.voxel_size],
-                dims: [res, pooled, u32::from(bricks.is_some()), sum_scale],
-                params: [emission_scale, radiance_scale, 1.0 / radiance_scale, 0.0],
-                pools: pool_uniforms(bricks.as_ref()),
-            },
+            &GpuVoxelGrid::new(&grid, bricks.as_ref(), sum_scale, [emission_scale, radiance_scale]),
         )?;
         let sums = SUM_NAMES[..sum_words(needs.emission)]
             .iter()
@@ -716,6 +716,17 @@ pub fn volume_bytes(ctx: Option<&Context>, format: vk::Format, extent: [u32; 3],
     }
     let desc = ImageDesc { mip_levels: mips, ..ImageDesc::d3_extent(format, extent, usage) };
     crate::gpu::memory::device_image_bytes(ctx, &desc).max(texels)
+}
+
+/// With `gi.voxel_layout = "bricks"`: the maps, pooled levels and lists, each pool's slots
+/// arranged to take the least of `ctx`'s device memory.
+fn bricks_on(ctx: &Arc<Context>, scene: &Scene, grid: &VoxelGrid, needs: &VoxelNeeds) -> GpuResult<Option<Bricks>> {
+    if scene.settings.gi.voxel_layout != VoxelLayout::Bricks {
+        return Ok(None);
+    }
+    let image_bytes = |f, e, sampled| volume_bytes(Some(ctx), f, e, 1, sampled);
+    let layout = BrickLayout::for_scene(scene, grid, needs.cones).fit(needs.full_images(), &image_bytes);
+    Bricks::new(ctx, layout).map(Some)
 }
 
 /// The scan buffer ([`ScanLayout`]) for a grid of `res` and its pools of bricks, if any.
