@@ -252,3 +252,78 @@ fn scene_time_moves_dynamic_objects() {
     assert_ne!(a, b, "objects did not move between t=0 and t=1");
     assert_eq!(a, a2, "the same time must give the same image");
 }
+
+/// The shadow maps are drawn only where what they are drawn from changed, and hold the same
+/// bytes as a redraw. The dynamic test scene (two moving cubes in the Cornell box, a point
+/// light's six views) plus a sun through the open front (cascades fitted to the camera, and a
+/// whole-scene view), in the default async schedule with two frames in flight: each frame is
+/// compared, image and maps, with a new renderer's first frame at the same camera and with
+/// the objects placed where they are at that time, without motion (so one pass draws every
+/// caster). With the moving cubes, their shadows are drawn over a copy of the static casters'
+/// maps; without motion, one pass draws every caster. Direct light alone, then voxel cone tracing
+/// (whose voxel light samples the maps when it relights, here every frame).
+#[test]
+fn shadow_maps_are_redrawn_only_when_their_inputs_change_and_match_a_redraw() {
+    use dvsgi::render::{Mode, RenderOptions, Renderer};
+    use dvsgi::scene::{GiMode, Light, Motion, Scene};
+    let ctx = context();
+    let mut base = load(
+        &repo().join("scenes/dynamic-test.toml"),
+        &[("render.width", "48"), ("render.height", "48"), ("render.shadow_map_size", "128")],
+    );
+    base.settings.shadow_cascades = 2;
+    base.settings.gi.bounces = 0;
+    base.settings.gi.voxel_resolution = 16;
+    let sun = LightKind::Directional { direction: Vec3::new(0.1, -0.5, 1.0), irradiance: Vec3::splat(2.0) };
+    base.lights.push(Light { name: "sun".into(), kind: sun, cast_shadows: true, motion: Motion::None });
+    let camera_a = base.camera.clone();
+    let mut camera_b = base.camera.clone();
+    camera_b.position += Vec3::new(0.05, 0.02, 0.1);
+    let frames = [(0.5, &camera_a), (0.5, &camera_a), (1.0, &camera_a), (1.0, &camera_b)];
+    let maps_of = |r: &mut Renderer| {
+        let maps = r.all_images().into_iter().find(|i| i.name == "shadow maps").expect("shadow maps");
+        r.download(&maps).unwrap()
+    };
+    // A redraw: a new renderer's first frame of the scene with every object placed where it
+    // is at `t` without motion, so that one pass draws every caster.
+    let fresh = |scene: &Scene, t: f32, camera: &dvsgi::scene::Camera| {
+        let mut s = scene.clone();
+        s.camera = camera.clone();
+        for o in &mut s.objects {
+            (o.transform, o.motion) = (o.model_matrix(t), Motion::None);
+        }
+        let mut r = Renderer::new(&ctx, s).unwrap();
+        r.render(t, true).unwrap();
+        (r.output().radiance, maps_of(&mut r))
+    };
+    let shadow_passes = |r: &Renderer| -> Vec<String> {
+        r.last_pass_names().iter().filter(|n| n.starts_with("shadow map")).cloned().collect()
+    };
+    let (all, none) = (vec!["shadow maps"], Vec::<&str>::new());
+    let (cached, over) = (
+        vec!["shadow maps (static casters)", "shadow map copy", "shadow maps (moving casters)"],
+        vec!["shadow map copy", "shadow maps (moving casters)"],
+    );
+    for (moving, gi) in [(true, GiMode::None), (false, GiMode::None), (true, GiMode::Vct)] {
+        let mut scene = base.clone();
+        scene.settings.gi.mode = gi;
+        if !moving {
+            scene.objects.iter_mut().for_each(|o| o.motion = Motion::None);
+        }
+        // Frame by frame: which shadow passes run.
+        let expected = if moving { [&cached, &none, &over, &cached] } else { [&all, &none, &none, &all] };
+        let options = RenderOptions { mode: Mode::Async, frames_in_flight: 2 };
+        let mut r = Renderer::with_options(&ctx, scene.clone(), options).unwrap();
+        for (i, (t, camera)) in frames.iter().enumerate() {
+            r.scene.camera = (*camera).clone();
+            r.render(*t, true).unwrap();
+            let what = format!("{gi:?}, moving casters {moving}, frame {i}");
+            assert_eq!(shadow_passes(&r), *expected[i], "{what}: {:?}", r.last_pass_names());
+            let (image, maps) = (r.output().radiance, maps_of(&mut r));
+            let (redrawn_image, redrawn_maps) = fresh(&scene, *t, camera);
+            assert!(maps == redrawn_maps, "{what}: the maps differ from a redraw");
+            assert!(image == redrawn_image, "{what}: the image differs from a redraw");
+        }
+    }
+    assert_no_validation_messages(&ctx);
+}

@@ -202,7 +202,7 @@ fn lights_without_shadows_get_no_maps() {
     let mut r =
         Renderer::new(&ctx, cornell(&[("lights.0.cast_shadows", "false"), ("render.view", "\"indirect\"")])).unwrap();
     r.render(0.0, true).unwrap();
-    let names = r.pass_names(false);
+    let names = r.last_pass_names().to_vec();
     assert!(!names.iter().any(|n| n.contains("reflective") || n.starts_with("rsm")), "{names:?}");
     assert!(!r.images().iter().any(|i| i.name.starts_with("rsm")), "an RSM image exists");
     assert!(r.output().radiance.chunks_exact(4).all(|p| p[..3] == [0.0; 3]), "indirect light without a map");
@@ -228,7 +228,7 @@ fn every_map_volume_and_image_is_finite_and_the_light_never_negative() {
             cornell(&[("gi.mode", &m), ("gi.downsample", "2"), ("gi.rsm_size", "64"), ("gi.lpv_resolution", "16")]);
         let mut r = Renderer::new(&ctx, scene).unwrap();
         r.render(0.0, true).unwrap();
-        let names = r.pass_names(false);
+        let names = r.last_pass_names().to_vec();
         for p in expected {
             assert!(names.iter().any(|n| n == p), "{mode}: {p} missing from {names:?}");
         }
@@ -433,4 +433,40 @@ fn a_blocker_between_a_lit_wall_and_a_receiver_cuts_the_lpv_light() {
         "behind the plate, occlusion keeps {kept:.4} of the light (LPV {:.4} without it)",
         unoccluded[1]
     );
+}
+
+/// The reflective shadow maps, and the light propagation volume injected from them, are drawn
+/// only when what they are drawn from changed (a light, a view, a caster): a camera that moves
+/// reuses them, a light that moves redraws them. Every frame is the image a new renderer makes
+/// of the same scene, in the async schedule with two frames in flight.
+#[test]
+fn reflective_shadow_maps_are_redrawn_only_when_a_light_or_a_caster_moves() {
+    let ctx = context();
+    let base = cornell(&[("gi.mode", "\"rsm+lpv\""), ("gi.rsm_size", "64"), ("gi.lpv_resolution", "16")]);
+    let options = RenderOptions { mode: Mode::Async, frames_in_flight: 2 };
+    let mut r = Renderer::with_options(&ctx, base.clone(), options).unwrap();
+    // (camera moved, light moved, the maps drawn)
+    let frames = [(0.0, 0.0, true), (0.0, 0.0, false), (0.05, 0.0, false), (0.05, 0.03, true), (0.05, 0.03, false)];
+    for (i, &(camera, light, drawn)) in frames.iter().enumerate() {
+        let mut s = base.clone();
+        s.camera.position.x += camera;
+        match &mut s.lights[0].kind {
+            LightKind::Point { position, .. } | LightKind::Spot { position, .. } => position.x += light,
+            LightKind::Directional { .. } => unreachable!("the Cornell box's light is a point or spot light"),
+        }
+        (r.scene.camera, r.scene.lights) = (s.camera.clone(), s.lights.clone());
+        r.render(0.0, true).unwrap();
+        let names = r.last_pass_names();
+        for p in ["reflective shadow maps", "lpv inject", "lpv propagate"] {
+            assert_eq!(names.iter().any(|n| n == p), drawn, "frame {i}: {p} in {names:?}");
+        }
+        for p in ["rsm gather", "lpv lookup", "gi add"] {
+            assert!(names.iter().any(|n| n == p), "frame {i}: {p} missing from {names:?}");
+        }
+        let image = r.output().radiance;
+        let (redrawn, _) = render(&ctx, s);
+        assert!(image == redrawn.radiance, "frame {i}: the image differs from a new renderer's");
+    }
+    drop(r);
+    assert_no_validation_messages(&ctx);
 }

@@ -74,7 +74,10 @@ impl Estimate {
         let px = iw as u64 * ih as u64;
         // depth 4 + albedo 4 + normal 8 + specular 4 + emission 8, radiance 16, display 4.
         e.targets = px * (28 + 16 + 4);
-        e.shadow_maps = if shadow_views > 0 { 4 * (s.shadow_map_size as u64).pow(2) * shadow_views as u64 } else { 4 };
+        // With moving casters the static casters' maps are cached in a second array.
+        let copies = if crate::render::frame::moving_casters(scene) { 2 } else { 1 };
+        e.shadow_maps =
+            if shadow_views > 0 { copies * 4 * (s.shadow_map_size as u64).pow(2) * shadow_views as u64 } else { 4 };
         if s.gi.uses_rsm() && !voxel_view {
             let views = crate::render::lights::rsm_views(scene).len() as u64;
             if views > 0 {

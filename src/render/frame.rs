@@ -2,6 +2,7 @@
 //! This is the one place to read to know what a frame does.
 
 use super::graph::{Pass, QueueKind};
+use super::lights::GpuShadowView;
 use super::passes::gbuffer::{GBuffer, GBufferPass};
 use super::passes::gi_trace::{GiAddPass, GiPlaceholders, GiTargets, GiTracePass, GiUpsamplePass};
 use super::passes::lighting::{GiInputs, LightingInputs, LightingOutput, LightingPass};
@@ -10,7 +11,7 @@ use super::passes::readback::ReadbackPasses;
 use super::passes::resolve::ResolvePass;
 use super::passes::rsm::{RsmGatherPass, RsmMaps, RsmPass};
 use super::passes::rt_shadow::RtShadowPass;
-use super::passes::shadow::ShadowPass;
+use super::passes::shadow::ShadowMaps;
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::upload::UploadPass;
 use super::passes::voxel_bounce::{BounceComposePass, VoxelBouncePass};
@@ -23,12 +24,14 @@ use super::passes::voxel_resolve::{Scan, VoxelResolvePass};
 use super::passes::voxel_view::{VoxelMipViewPass, VoxelViewPass};
 use super::passes::voxelize::{VoxelizePass, Voxelizer};
 use super::rays::{missing_ray_queries, RtReflectPass, SceneRays, TopLevelBuildPass};
+use super::reuse::InputsSeen;
 use super::scene_gpu::SceneGpu;
 use super::voxel::VoxelVolumes;
 use super::FrameBuffers;
 use crate::gpu::{Buffer, Context, GpuResult, Image, ImageDesc};
 use crate::scene::{DirectShadows, GiMode, RenderSettings, Scene, SpecularSource, View, VoxelOcclusion};
 use ash::vk;
+use std::cell::{Cell, RefCell};
 use std::sync::Arc;
 
 /// The voxel passes; they exist only with `gi.mode = "vct"` or a voxel view.
@@ -338,6 +341,10 @@ pub struct RsmPasses {
     pub upsample: Option<GiUpsamplePass>,
     /// The downsampling factor for the gather, the lookup and the upsample (`GiParams`).
     params: Buffer,
+    /// The views, lights and instances the maps were drawn from.
+    seen: RefCell<InputsSeen>,
+    /// The next frame draws the maps (and injects and propagates the volume): they changed.
+    due: Cell<bool>,
 }
 
 impl RsmPasses {
@@ -388,14 +395,39 @@ impl RsmPasses {
             GiMode::RsmLpv => "rsm+lpv",
             _ => "rsm",
         };
-        let mut passes =
-            RsmPasses { render: RsmPass::new(ctx, scene_gpu, frame, &maps)?, gather, lpv, add, upsample: None, params };
+        let render = RsmPass::new(ctx, scene_gpu, frame, &maps)?;
+        let (seen, due) = (RefCell::default(), Cell::new(true));
+        let mut passes = RsmPasses { render, gather, lpv, add, upsample: None, params, seen, due };
         if k > 1 {
             let full = GiTargets::new(ctx, &format!(" ({what})"), width, height, false, false)?;
             let up = GiUpsamplePass::new(ctx, frame, gbuffer, &passes.params, passes.low(), full, placeholders)?;
             passes.upsample = Some(up);
         }
         Ok(Some(passes))
+    }
+
+    /// Plan the next frame: the maps are drawn (and the volume injected and propagated) when
+    /// the views they are drawn from, the lights or the instances changed.
+    pub fn plan(&self, views: &[GpuShadowView], lights: &[u8], instances: &[u8]) {
+        let own = self.render.maps.views.iter().map(|v| &views[v[0] as usize]);
+        let mut inputs: Vec<u8> = own.flat_map(|v| bytemuck::bytes_of(v).to_vec()).collect();
+        inputs.extend_from_slice(lights);
+        inputs.extend_from_slice(instances);
+        self.due.set(self.seen.borrow_mut().changed(&inputs));
+    }
+
+    /// After a frame is recorded: the next one draws the maps only if its plan says so.
+    pub fn recorded(&self) {
+        self.due.set(false);
+    }
+
+    /// The passes before the G-buffer: the maps, when they changed.
+    fn before_gbuffer(&self) -> Vec<&dyn Pass> {
+        if self.due.get() {
+            vec![&self.render]
+        } else {
+            Vec::new()
+        }
     }
 
     /// The indirect light at the traced resolution.
@@ -420,9 +452,12 @@ impl RsmPasses {
             out.push(g);
         }
         if let Some(l) = &self.lpv {
-            out.push(&l.inject);
-            if let Some(p) = &l.propagate {
-                out.push(p);
+            // The volume holds the light of the maps as they are.
+            if self.due.get() {
+                out.push(&l.inject);
+                if let Some(p) = &l.propagate {
+                    out.push(p);
+                }
             }
             out.push(&l.lookup);
         }
@@ -483,7 +518,7 @@ pub struct FramePasses {
     pub upload: UploadPass,
     pub voxels: Option<VoxelPasses>,
     /// Only when some light casts shadows that are resolved with shadow maps.
-    pub shadow: Option<ShadowPass>,
+    pub shadow: Option<ShadowMaps>,
     /// The direct light samples the shadow maps (every frame); else only voxel lighting does.
     pub direct_shadow_maps: bool,
     pub gbuffer: GBufferPass,
@@ -542,7 +577,12 @@ impl FramePasses {
         refuse_rays_without_queries(ctx, s)?;
         let (width, height) = s.internal_size();
         let gbuffer = Arc::new(GBuffer::new(ctx, width, height)?);
-        let atlas = shadow_atlas(ctx, s.shadow_map_size, shadow_views)?;
+        let atlas = shadow_atlas(ctx, "shadow maps", s.shadow_map_size, shadow_views)?;
+        // With moving casters the static ones are drawn into a cache of the maps.
+        let shadow_cache = match (shadow_views, moving_casters(scene)) {
+            (1.., true) => Some(shadow_atlas(ctx, "shadow maps (static casters)", s.shadow_map_size, shadow_views)?),
+            _ => None,
+        };
         let (radiance, display, resolve) = output_images(ctx, s)?;
         let shown = resolve.as_ref().map_or(&radiance, |r| &r.resolved).clone();
         let voxel_view = !matches!(s.view, View::Final | View::Indirect | View::Ao);
@@ -585,8 +625,11 @@ impl FramePasses {
             placeholders: &placeholders,
         };
         let shading = Shading::new(ctx, scene, frame, voxels.as_ref(), lit)?;
-        let shadow =
-            if shadow_views > 0 { Some(ShadowPass::new(ctx, scene_gpu, frame, &atlas, shadow_views)?) } else { None };
+        let shadow = if shadow_views > 0 {
+            Some(ShadowMaps::new(ctx, scene_gpu, frame, &atlas, shadow_cache.as_ref(), shadow_views)?)
+        } else {
+            None
+        };
         Ok(FramePasses {
             upload: frame_upload(frame, scene_gpu, rays.as_ref()),
             voxels,
@@ -596,6 +639,7 @@ impl FramePasses {
             targets: [&gbuffer.depth, &gbuffer.albedo, &gbuffer.normal, &gbuffer.specular, &gbuffer.emission]
                 .into_iter()
                 .chain([&atlas, &radiance, &display])
+                .chain(shadow_cache.as_ref())
                 .chain((!Arc::ptr_eq(&shown, &radiance)).then_some(&shown))
                 .chain(rt_shadow.as_ref().map(|r| &r.visibility))
                 .cloned()
@@ -672,6 +716,23 @@ impl FramePasses {
         voxel_lighting
     }
 
+    /// The frame lights the voxels (and rebuilds mips and bounces).
+    fn relights(&self, state: FrameState) -> bool {
+        let lit_voxels = match &self.shading {
+            Shading::Lighting(_) | Shading::MipView(_) => true,
+            Shading::VoxelView(view) => view.shows_radiance(),
+        };
+        lit_voxels && (state.relight || !state.static_voxelized)
+    }
+
+    /// Something in the frame samples the shadow maps: the voxel light when it relights, the
+    /// direct light unless cones or rays shadow every light. The maps are then brought up to
+    /// date (`ShadowMaps::plan`), which draws only the views whose inputs changed.
+    pub fn samples_shadow_maps(&self, state: FrameState) -> bool {
+        let direct = self.direct_shadow_maps && matches!(&self.shading, Shading::Lighting(_));
+        self.shadow.is_some() && (self.relights(state) || direct)
+    }
+
     /// The frame, in dependency order. Every schedule mode runs this list; the scheduler
     /// only decides which queue each pass goes to.
     pub fn list(&self, state: FrameState) -> Vec<&dyn Pass> {
@@ -692,19 +753,12 @@ impl FramePasses {
                 passes.push(&d.resolve);
             }
         }
-        let lit_voxels = match &self.shading {
-            Shading::Lighting(_) | Shading::MipView(_) => true,
-            Shading::VoxelView(view) => view.shows_radiance(),
-        };
-        let relight = lit_voxels && (state.relight || !state.static_voxelized);
-        let direct_needs_shadow_maps = self.direct_shadow_maps && matches!(&self.shading, Shading::Lighting(_));
-        if let Some(shadow) = &self.shadow {
-            if relight || direct_needs_shadow_maps {
-                passes.push(shadow);
-            }
+        let relight = self.relights(state);
+        if let (true, Some(shadow)) = (self.samples_shadow_maps(state), &self.shadow) {
+            shadow.push(&mut passes);
         }
         if let Some(r) = &self.rsm {
-            passes.push(&r.render);
+            passes.extend(r.before_gbuffer());
         }
         // The voxel illumination chain: direct light, mips, bounces (each with its mips).
         let mut voxel_lighting = if relight { self.voxel_lighting(state) } else { Vec::new() };
@@ -780,12 +834,14 @@ fn frame_upload(frame: &FrameBuffers, scene_gpu: &SceneGpu, rays: Option<&RayPas
 
 /// The shadow maps of `views` views of `size`² texels, one layer each. Without shadowed lights
 /// the lighting pass still binds a 1x1 placeholder map.
-fn shadow_atlas(ctx: &Arc<Context>, size: u32, views: u32) -> GpuResult<Arc<Image>> {
+/// The maps and their cache are copied into one another.
+fn shadow_atlas(ctx: &Arc<Context>, name: &str, size: u32, views: u32) -> GpuResult<Arc<Image>> {
     let (size, layers) = if views > 0 { (size, views) } else { (1, 1) };
     let usage = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
         | vk::ImageUsageFlags::SAMPLED
-        | vk::ImageUsageFlags::TRANSFER_SRC;
-    let name = if views > 0 { "shadow maps" } else { "shadow map placeholder" };
+        | vk::ImageUsageFlags::TRANSFER_SRC
+        | vk::ImageUsageFlags::TRANSFER_DST;
+    let name = if views > 0 { name } else { "shadow map placeholder" };
     Image::new(ctx, name, ImageDesc::d2_array(SHADOW_FORMAT, size, size, layers, usage)).map(Arc::new)
 }
 
@@ -828,6 +884,12 @@ pub fn shadow_map_views(scene: &Scene) -> u32 {
     } else {
         0
     }
+}
+
+/// Some object moves (its transform changes with scene time): its shadow is drawn over a
+/// cache of the static casters' maps.
+pub fn moving_casters(scene: &Scene) -> bool {
+    scene.objects.iter().any(|o| !o.motion.is_static())
 }
 
 /// The direct light samples shadow maps: unless cones or rays shadow every light (they take

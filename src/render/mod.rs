@@ -10,6 +10,7 @@ pub mod lights;
 pub mod lpv;
 pub mod passes;
 pub mod rays;
+pub mod reuse;
 pub mod scene_gpu;
 pub mod schedule;
 pub mod texture;
@@ -447,8 +448,8 @@ impl Renderer {
         self.scheduler.wait_idle()
     }
 
-    /// Write the per-frame data for scene time `t`; whether the lights changed.
-    fn update(&mut self, t: f32) -> bool {
+    /// Write the per-frame data for scene time `t`.
+    fn update(&mut self, t: f32) -> Written {
         let s = &self.scene.settings;
         let cam = &self.scene.camera;
         let view = cam.view();
@@ -484,11 +485,12 @@ impl Renderer {
             self.last_lights = bytes.to_vec();
         }
         upload.set(2, bytemuck::cast_slice(&views));
-        upload.set(3, &self.scene_gpu.instance_bytes(&self.scene, t));
+        let instances = self.scene_gpu.instance_bytes(&self.scene, t);
+        upload.set(3, &instances);
         if let Some(r) = self.passes.rays().filter(|r| r.build.is_some()) {
             upload.set(4, &r.scene.instance_bytes(&self.scene, &self.scene_gpu, t));
         }
-        lights_moved
+        Written { lights_moved, views, instances }
     }
 
     /// The frames in the ray-traced reflections' history before this one: one more than last
@@ -520,9 +522,15 @@ impl Renderer {
         }
         let frame = self.frame_index;
         self.scheduler.begin(Some(frame))?;
-        let lights_moved = self.update(t);
-        let history = self.reflection_history(t, lights_moved);
+        let written = self.update(t);
+        let history = self.reflection_history(t, written.lights_moved);
         let state = self.frame_state(readback);
+        if let (true, Some(shadow)) = (self.passes.samples_shadow_maps(state), &self.passes.shadow) {
+            shadow.plan(&written.views, &written.instances);
+        }
+        if let Some(r) = &self.passes.rsm {
+            r.plan(&written.views, &self.last_lights, &written.instances);
+        }
         // The update counter and interleave of the bounce (uniforms written last: whether the
         // voxels relight depends on the lights just written).
         let interleave = if state.feed_back { self.scene.settings.gi.bounce_interleave } else { 1 };
@@ -535,6 +543,13 @@ impl Renderer {
         list.extend_from_slice(extra);
         self.last_passes = list.iter().map(|p| p.name().to_string()).collect();
         self.scheduler.record(&list)?;
+        drop(list);
+        if let Some(shadow) = &self.passes.shadow {
+            shadow.recorded();
+        }
+        if let Some(r) = &self.passes.rsm {
+            r.recorded();
+        }
         self.scheduler.end(readback)?;
         if self.passes.voxels.is_some() {
             self.static_voxelized = true;
@@ -565,6 +580,15 @@ impl Renderer {
         }
         out
     }
+}
+
+/// What [`Renderer::update`] wrote for a frame.
+struct Written {
+    /// The lights differ from the last frame's.
+    lights_moved: bool,
+    views: Vec<lights::GpuShadowView>,
+    /// The instance table.
+    instances: Vec<u8>,
 }
 
 /// The frame's display image (RGBA8) at the exposure `render.exposure = "auto"` picks for its

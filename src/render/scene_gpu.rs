@@ -57,6 +57,8 @@ pub struct Draw {
     pub material: u32,
     /// The object is dynamic (re-voxelized when it moves).
     pub dynamic: bool,
+    /// The object has motion: its transform changes with scene time.
+    pub moving: bool,
     /// The material is alpha-masked (passes that only write depth need a fragment shader).
     pub masked: bool,
     /// The largest index (before `vertex_offset`) of the mesh.
@@ -385,6 +387,7 @@ impl SceneGpu {
                     object: oi,
                     material: mesh.material,
                     dynamic: object.dynamic,
+                    moving: !object.motion.is_static(),
                     masked: scene.materials.get(mesh.material as usize).is_some_and(|m| m.mask_texture.is_some()),
                     max_index: mesh.indices.iter().copied().max().unwrap_or(0),
                 });

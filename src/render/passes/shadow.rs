@@ -1,15 +1,46 @@
 //! Shadow maps: depth-only renders of the scene, one per shadow view, into the layers of
-//! one depth array. Runs only when the scene has a light that casts shadows.
+//! one depth array. Runs only when the scene has a light that casts shadows, and draws only
+//! the views whose inputs changed since they were last drawn (`render::reuse`).
+//!
+//! Without moving casters one pass draws every caster. With moving casters the static ones
+//! are drawn into a cached copy of the maps (when a view changed), the cache is copied into
+//! the maps, and the moving casters are drawn over it (when they or a view changed). Depth
+//! keeps the nearest fragment whatever the order of the draws, so the maps hold the same
+//! bytes as one pass over every caster.
 
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, GraphicsDesc, Image, Pipeline};
 use crate::render::graph::{Pass, Use};
-use crate::render::scene_gpu::SceneGpu;
+use crate::render::scene_gpu::{Draw, SceneGpu};
 use crate::render::FrameBuffers;
 use ash::vk;
+use std::cell::RefCell;
 use std::sync::Arc;
 
+/// Which casters a shadow pass draws, and from what it starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Casters {
+    /// Every caster, over cleared views (a scene without moving casters).
+    All,
+    /// The casters that never move, over cleared views (into the cache).
+    Static,
+    /// The moving casters, over what the views hold (the copied cache).
+    Moving,
+}
+
+impl Casters {
+    fn draws(self, d: &Draw) -> bool {
+        match self {
+            Casters::All => true,
+            Casters::Static => !d.moving,
+            Casters::Moving => d.moving,
+        }
+    }
+}
+
 pub struct ShadowPass {
-    pub atlas: Arc<Image>,
+    name: &'static str,
+    pub target: Arc<Image>,
+    casters: Casters,
     scene: Arc<SceneGpu>,
     frame: FrameBuffers,
     pipeline: Pipeline,
@@ -18,10 +49,12 @@ pub struct ShadowPass {
     /// alpha test, which costs the early depth test, so opaque draws keep the plain one.
     masked: Option<(Pipeline, DescriptorSet)>,
     views: u32,
+    /// The views this frame draws (set before the frame is recorded; every view at first).
+    drawn: RefCell<Vec<u32>>,
 }
 
 fn depth_only<'a>(
-    atlas: &Image,
+    target: &Image,
     vert: &'a [u8],
     frag: Option<&'a [u8]>,
     attributes: &'a [u32],
@@ -33,7 +66,7 @@ fn depth_only<'a>(
         geom: None,
         frag,
         color_formats: &[],
-        depth_format: Some(atlas.desc.format),
+        depth_format: Some(target.desc.format),
         depth_test: true,
         depth_write: true,
         cull: vk::CullModeFlags::NONE,
@@ -45,12 +78,14 @@ fn depth_only<'a>(
 }
 
 impl ShadowPass {
+    /// Draws `casters` into the `views` layers of `target`.
     pub fn new(
         ctx: &Arc<Context>,
         scene: &Arc<SceneGpu>,
         frame: &FrameBuffers,
-        atlas: &Arc<Image>,
+        target: &Arc<Image>,
         views: u32,
+        casters: Casters,
     ) -> GpuResult<Self> {
         let set = DescriptorSet::new(
             ctx,
@@ -61,11 +96,11 @@ impl ShadowPass {
         let pipeline = Pipeline::graphics(
             ctx,
             "shadow",
-            &depth_only(atlas, shaders::SHADOW_VERT, None, &[0], &[]),
+            &depth_only(target, shaders::SHADOW_VERT, None, &[0], &[]),
             &[set.layout],
             4,
         )?;
-        let masked = if scene.draws.iter().any(|d| d.masked) {
+        let masked = if scene.draws.iter().any(|d| d.masked && casters.draws(d)) {
             let [materials, textures] = scene.materials.binds();
             let set = DescriptorSet::new(
                 ctx,
@@ -81,62 +116,226 @@ impl ShadowPass {
             )?;
             let spec = [(0, scene.materials.texture_count())];
             let desc =
-                depth_only(atlas, shaders::SHADOW_MASKED_VERT, Some(shaders::SHADOW_MASKED_FRAG), &[0, 2], &spec);
+                depth_only(target, shaders::SHADOW_MASKED_VERT, Some(shaders::SHADOW_MASKED_FRAG), &[0, 2], &spec);
             Some((Pipeline::graphics(ctx, "shadow (masked)", &desc, &[set.layout], 4)?, set))
         } else {
             None
         };
+        let name = match casters {
+            Casters::All => "shadow maps",
+            Casters::Static => "shadow maps (static casters)",
+            Casters::Moving => "shadow maps (moving casters)",
+        };
         Ok(ShadowPass {
-            atlas: atlas.clone(),
+            name,
+            target: target.clone(),
+            casters,
             scene: scene.clone(),
             frame: frame.clone(),
             pipeline,
             set,
             masked,
             views,
+            drawn: RefCell::new((0..views).collect()),
         })
+    }
+
+    /// Draw `views` on the next frame (none: the pass does not run).
+    pub fn set_views(&self, views: &[u32]) {
+        *self.drawn.borrow_mut() = views.to_vec();
+    }
+
+    /// Whether the next frame draws any view.
+    pub fn draws(&self) -> bool {
+        !self.drawn.borrow().is_empty()
+    }
+
+    /// One view: cleared (or loaded) and drawn.
+    fn record_view(&self, ctx: &Context, cmd: vk::CommandBuffer, view: u32) {
+        let extent = self.target.extent2d();
+        let d = &ctx.device;
+        let load =
+            if self.casters == Casters::Moving { vk::AttachmentLoadOp::LOAD } else { vk::AttachmentLoadOp::CLEAR };
+        let depth = vk::RenderingAttachmentInfo::default()
+            .image_view(self.target.layer_views[view as usize])
+            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+            .load_op(load)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
+        let info = vk::RenderingInfo::default()
+            .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
+            .layer_count(1)
+            .depth_attachment(&depth);
+        let casters = self.casters;
+        unsafe {
+            d.cmd_begin_rendering(cmd, &info);
+            self.pipeline.bind(cmd, &[self.set.set]);
+            super::set_viewport(ctx, cmd, extent);
+            // Constant and slope-scaled bias against acne; the lighting pass adds a
+            // normal offset (shadow_normal_bias).
+            d.cmd_set_depth_bias(cmd, 1.0, 0.0, 1.5);
+            self.pipeline.push(cmd, &view);
+            self.scene.draw_where(ctx, cmd, |d| !d.masked && casters.draws(d));
+            if let Some((pipeline, set)) = &self.masked {
+                pipeline.bind(cmd, &[set.set]);
+                pipeline.push(cmd, &view);
+                self.scene.draw_where(ctx, cmd, |d| d.masked && casters.draws(d));
+            }
+            d.cmd_end_rendering(cmd);
+        }
     }
 }
 
 impl Pass for ShadowPass {
     fn name(&self) -> &str {
-        "shadow maps"
+        self.name
     }
     fn uses(&self) -> Vec<Use<'_>> {
-        let mut uses = vec![Use::overwrite(&self.atlas, Access::DepthAttachmentWrite), self.scene.instance_reads()];
+        // Views that are not drawn keep what they hold; the moving casters draw over the copy.
+        let whole = self.casters != Casters::Moving && self.drawn.borrow().len() as u32 == self.views;
+        let target = Use { discard: whole, ..Use::image(&self.target, Access::DepthAttachmentWrite) };
+        let mut uses = vec![target, self.scene.instance_reads()];
         uses.extend(self.frame.reads(Access::GraphicsShaderReadBuffer));
         uses
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
-        let extent = self.atlas.extent2d();
-        let d = &ctx.device;
-        for view in 0..self.views {
-            let depth = vk::RenderingAttachmentInfo::default()
-                .image_view(self.atlas.layer_views[view as usize])
-                .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-                .load_op(vk::AttachmentLoadOp::CLEAR)
-                .store_op(vk::AttachmentStoreOp::STORE)
-                .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
-            let info = vk::RenderingInfo::default()
-                .render_area(vk::Rect2D { offset: vk::Offset2D::default(), extent })
-                .layer_count(1)
-                .depth_attachment(&depth);
-            unsafe {
-                d.cmd_begin_rendering(cmd, &info);
-                self.pipeline.bind(cmd, &[self.set.set]);
-                super::set_viewport(ctx, cmd, extent);
-                // Constant and slope-scaled bias against acne; the lighting pass adds a
-                // normal offset (shadow_normal_bias).
-                d.cmd_set_depth_bias(cmd, 1.0, 0.0, 1.5);
-                self.pipeline.push(cmd, &view);
-                self.scene.draw_where(ctx, cmd, |d| !d.masked);
-                if let Some((pipeline, set)) = &self.masked {
-                    pipeline.bind(cmd, &[set.set]);
-                    pipeline.push(cmd, &view);
-                    self.scene.draw_where(ctx, cmd, |d| d.masked);
-                }
-                d.cmd_end_rendering(cmd);
-            }
+        for &view in self.drawn.borrow().iter() {
+            self.record_view(ctx, cmd, view);
+        }
+    }
+}
+
+/// The cached maps of the static casters copied into the shadow maps, view by view, for the
+/// moving casters to be drawn over.
+pub struct ShadowCopyPass {
+    pub cache: Arc<Image>,
+    pub maps: Arc<Image>,
+    views: u32,
+    /// The views this frame copies (set before the frame is recorded; every view at first).
+    copied: RefCell<Vec<u32>>,
+}
+
+impl ShadowCopyPass {
+    pub fn new(cache: &Arc<Image>, maps: &Arc<Image>, views: u32) -> ShadowCopyPass {
+        ShadowCopyPass { cache: cache.clone(), maps: maps.clone(), views, copied: RefCell::new((0..views).collect()) }
+    }
+
+    /// Copy `views` on the next frame.
+    pub fn set_views(&self, views: &[u32]) {
+        *self.copied.borrow_mut() = views.to_vec();
+    }
+}
+
+impl Pass for ShadowCopyPass {
+    fn name(&self) -> &str {
+        "shadow map copy"
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        let whole = self.copied.borrow().len() as u32 == self.views;
+        let maps = Use { discard: whole, ..Use::image(&self.maps, Access::TransferWrite) };
+        vec![Use::image(&self.cache, Access::TransferRead), maps]
+    }
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        let layer = |view: u32| vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::DEPTH,
+            mip_level: 0,
+            base_array_layer: view,
+            layer_count: 1,
+        };
+        let extent = vk::Extent3D { depth: 1, ..self.maps.desc.extent };
+        let regions: Vec<vk::ImageCopy> = self
+            .copied
+            .borrow()
+            .iter()
+            .map(|&v| vk::ImageCopy {
+                src_subresource: layer(v),
+                dst_subresource: layer(v),
+                extent,
+                ..Default::default()
+            })
+            .collect();
+        unsafe {
+            ctx.device.cmd_copy_image(
+                cmd,
+                self.cache.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                self.maps.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &regions,
+            )
+        };
+    }
+}
+
+/// The moving casters' passes: the cache copied into the maps, the moving casters over it.
+pub struct MovingCasters {
+    /// The static casters' maps, drawn only when a view changes.
+    pub cache: Arc<Image>,
+    pub copy: ShadowCopyPass,
+    pub draw: ShadowPass,
+}
+
+/// The shadow maps' passes and what the maps hold (`reuse::ShadowCache`).
+pub struct ShadowMaps {
+    /// Every caster, or with moving casters the static ones into the cache.
+    pub draw: ShadowPass,
+    pub moving: Option<MovingCasters>,
+    cache: RefCell<crate::render::reuse::ShadowCache>,
+}
+
+impl ShadowMaps {
+    /// The passes that draw the `views` layers of `maps`; with moving casters, `cache` (an
+    /// image like `maps`) holds the static casters.
+    pub fn new(
+        ctx: &Arc<Context>,
+        scene: &Arc<SceneGpu>,
+        frame: &FrameBuffers,
+        maps: &Arc<Image>,
+        cache: Option<&Arc<Image>>,
+        views: u32,
+    ) -> GpuResult<ShadowMaps> {
+        let (draw, moving) = match cache {
+            None => (ShadowPass::new(ctx, scene, frame, maps, views, Casters::All)?, None),
+            Some(cache) => (
+                ShadowPass::new(ctx, scene, frame, cache, views, Casters::Static)?,
+                Some(MovingCasters {
+                    cache: cache.clone(),
+                    copy: ShadowCopyPass::new(cache, maps, views),
+                    draw: ShadowPass::new(ctx, scene, frame, maps, views, Casters::Moving)?,
+                }),
+            ),
+        };
+        Ok(ShadowMaps { draw, moving, cache: RefCell::default() })
+    }
+
+    /// Plan the next frame's draws for its `views` and `instances` (the instance table).
+    pub fn plan(&self, views: &[crate::render::lights::GpuShadowView], instances: &[u8]) {
+        let moving = self.moving.as_ref().map(|_| instances);
+        let draws = self.cache.borrow_mut().plan(views, moving);
+        self.draw.set_views(&draws.statics);
+        if let Some(m) = &self.moving {
+            m.copy.set_views(&draws.moving);
+            m.draw.set_views(&draws.moving);
+        }
+    }
+
+    /// After a frame is recorded: the next one draws what its plan says, else nothing.
+    pub fn recorded(&self) {
+        self.draw.set_views(&[]);
+        if let Some(m) = &self.moving {
+            m.copy.set_views(&[]);
+            m.draw.set_views(&[]);
+        }
+    }
+
+    /// The passes the next frame runs (none when every view is as drawn).
+    pub fn push<'a>(&'a self, passes: &mut Vec<&'a dyn Pass>) {
+        if self.draw.draws() {
+            passes.push(&self.draw);
+        }
+        if let Some(m) = self.moving.as_ref().filter(|m| m.draw.draws()) {
+            passes.push(&m.copy);
+            passes.push(&m.draw);
         }
     }
 }
