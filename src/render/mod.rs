@@ -304,7 +304,7 @@ impl Renderer {
         self.passes.targets.iter().cloned().chain(self.images()).collect()
     }
 
-    /// Copy an image of this renderer to the host (waits; for tests and debugging).
+    /// Copy an image of this renderer to the host, every layer (waits; for tests and debugging).
     pub fn download(&mut self, image: &Arc<crate::gpu::Image>) -> GpuResult<Vec<u8>> {
         self.download_level(image, 0)
     }

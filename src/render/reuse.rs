@@ -8,12 +8,14 @@
 
 use crate::render::lights::GpuShadowView;
 
-/// What the shadow maps were drawn from, view by view.
+/// What the shadow maps and the static casters' cache were drawn from, view by view.
 #[derive(Debug, Default)]
 pub struct ShadowCache {
-    /// Per view: the view (matrix and parameters) the static casters were drawn with (every
-    /// caster where none moves); `None` before the first draw.
-    views: Vec<Option<GpuShadowView>>,
+    /// Per view: the view (matrix and parameters) the maps hold; `None` before the first draw.
+    maps: Vec<Option<GpuShadowView>>,
+    /// Per view: the view the cache of the static casters holds, if it holds one (only with
+    /// moving casters, and only for views that stood still while the casters moved).
+    cache: Vec<Option<GpuShadowView>>,
     /// The instance table the moving casters were drawn with; `None` before the first draw.
     instances: Option<Vec<u8>>,
 }
@@ -21,16 +23,19 @@ pub struct ShadowCache {
 /// The views a frame draws.
 #[derive(Debug, Default, PartialEq, Eq)]
 pub struct ShadowDraws {
-    /// Views whose static casters are drawn (into the cache; every caster into the maps where
-    /// no caster moves): the views that changed.
+    /// Views drawn from scratch with every caster: the views that changed. A view that
+    /// changes every frame (a moving light's) costs what it did without a cache.
+    pub all: Vec<u32>,
+    /// Views whose static casters are drawn into the cache: views that stand still while the
+    /// moving casters move, and that the cache does not hold yet.
     pub statics: Vec<u32>,
-    /// Views the cache is copied into and the moving casters drawn over: every view when the
-    /// moving casters moved, else the views that changed. Empty without moving casters.
+    /// Views the cache is copied into and the moving casters drawn over: the views that stand
+    /// still while the moving casters move.
     pub moving: Vec<u32>,
 }
 
-fn same(a: &GpuShadowView, b: &GpuShadowView) -> bool {
-    bytemuck::bytes_of(a) == bytemuck::bytes_of(b)
+fn same(a: &Option<GpuShadowView>, b: &GpuShadowView) -> bool {
+    a.is_some_and(|a| bytemuck::bytes_of(&a) == bytemuck::bytes_of(b))
 }
 
 impl ShadowCache {
@@ -38,23 +43,27 @@ impl ShadowCache {
     /// instance table; `None` where no caster moves), recorded as done: call it only for a
     /// frame that records them.
     pub fn plan(&mut self, views: &[GpuShadowView], instances: Option<&[u8]>) -> ShadowDraws {
-        self.views.resize(views.len(), None);
-        let statics: Vec<u32> = (0..views.len())
-            .filter(|&i| !self.views[i].is_some_and(|held| same(&held, &views[i])))
-            .map(|i| i as u32)
-            .collect();
-        for &i in &statics {
-            self.views[i as usize] = Some(views[i as usize]);
-        }
-        let moving = match instances {
-            None => Vec::new(),
-            Some(now) if self.instances.as_deref() != Some(now) => {
-                self.instances = Some(now.to_vec());
-                (0..views.len() as u32).collect()
+        let n = views.len();
+        self.maps.resize(n, None);
+        self.cache.resize(n, None);
+        let mut draws = ShadowDraws::default();
+        let moved = instances.is_some_and(|now| self.instances.as_deref() != Some(now));
+        for (i, view) in views.iter().enumerate() {
+            if !same(&self.maps[i], view) {
+                draws.all.push(i as u32);
+                self.maps[i] = Some(*view);
+            } else if moved {
+                if !same(&self.cache[i], view) {
+                    draws.statics.push(i as u32);
+                    self.cache[i] = Some(*view);
+                }
+                draws.moving.push(i as u32);
             }
-            Some(_) => statics.clone(),
-        };
-        ShadowDraws { statics, moving }
+        }
+        if let Some(now) = instances {
+            self.instances = Some(now.to_vec());
+        }
+        draws
     }
 }
 
@@ -81,32 +90,42 @@ mod tests {
         GpuShadowView { view_proj: [[x; 4]; 4], params: [1.0, 1.0, 0.0, 0.0] }
     }
 
+    fn draws(all: &[u32], statics: &[u32], moving: &[u32]) -> ShadowDraws {
+        ShadowDraws { all: all.to_vec(), statics: statics.to_vec(), moving: moving.to_vec() }
+    }
+
     #[test]
     fn without_moving_casters_only_the_views_that_changed_are_drawn() {
         let mut c = ShadowCache::default();
-        let all = ShadowDraws { statics: vec![0, 1, 2], moving: vec![] };
-        assert_eq!(c.plan(&[view(1.0), view(2.0), view(3.0)], None), all, "the first frame draws every view");
-        assert_eq!(c.plan(&[view(1.0), view(2.0), view(3.0)], None), ShadowDraws::default());
+        let views = [view(1.0), view(2.0), view(3.0)];
+        assert_eq!(c.plan(&views, None), draws(&[0, 1, 2], &[], &[]), "the first frame draws every view");
+        assert_eq!(c.plan(&views, None), ShadowDraws::default());
         // A camera-fitted cascade moved: only it is drawn.
-        assert_eq!(c.plan(&[view(1.5), view(2.0), view(3.0)], None).statics, [0]);
+        assert_eq!(c.plan(&[view(1.5), view(2.0), view(3.0)], None), draws(&[0], &[], &[]));
         assert_eq!(c.plan(&[view(1.5), view(2.0), view(3.0)], None), ShadowDraws::default());
     }
 
     #[test]
-    fn moving_casters_are_drawn_over_every_view_when_they_move() {
+    fn moving_casters_are_drawn_over_the_cached_static_casters() {
         let mut c = ShadowCache::default();
         let views = [view(1.0), view(2.0)];
-        let first = c.plan(&views, Some(&[1, 2, 3, 4]));
-        assert_eq!(first, ShadowDraws { statics: vec![0, 1], moving: vec![0, 1] });
+        assert_eq!(c.plan(&views, Some(&[1, 2, 3, 4])), draws(&[0, 1], &[], &[]), "every caster, every view");
         assert_eq!(c.plan(&views, Some(&[1, 2, 3, 4])), ShadowDraws::default(), "nothing moved");
-        // The casters moved: the static maps are reused, every view gets the copy and the
-        // moving casters.
-        assert_eq!(c.plan(&views, Some(&[1, 2, 3, 5])), ShadowDraws { statics: vec![], moving: vec![0, 1] });
-        // A view changed and nothing moved: that view only, both layers.
-        assert_eq!(
-            c.plan(&[view(1.0), view(9.0)], Some(&[1, 2, 3, 5])),
-            ShadowDraws { statics: vec![1], moving: vec![1] }
-        );
+        // The casters moved: the static ones are cached, the copy gets the moving ones.
+        assert_eq!(c.plan(&views, Some(&[1, 2, 3, 5])), draws(&[], &[0, 1], &[0, 1]));
+        // From then on only the moving casters are drawn.
+        assert_eq!(c.plan(&views, Some(&[1, 2, 3, 6])), draws(&[], &[], &[0, 1]));
+        // A view changed (its light moved) as the casters moved: it is drawn from scratch,
+        // and the other gets the moving casters over its cache.
+        let turned = [view(1.0), view(9.0)];
+        assert_eq!(c.plan(&turned, Some(&[1, 2, 3, 7])), draws(&[1], &[], &[0]));
+        // It stands still now: its cache is drawn again before the moving casters go over it.
+        assert_eq!(c.plan(&turned, Some(&[1, 2, 3, 8])), draws(&[], &[1], &[0, 1]));
+        // A view that changes every frame is drawn from scratch every frame, never cached.
+        for k in 0..3 {
+            let light = [view(1.0), view(10.0 + k as f32)];
+            assert_eq!(c.plan(&light, Some(&[1, 2, 4, k])), draws(&[1], &[], &[0]));
+        }
     }
 
     #[test]

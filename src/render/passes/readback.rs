@@ -17,7 +17,8 @@ pub fn bytes_per_texel(format: vk::Format) -> u64 {
     }
 }
 
-/// Copy of one image (one mip level, layer 0, all depth slices) into a new host-visible buffer.
+/// Copy of one image (one mip level, every layer and depth slice, layer after layer) into a new
+/// host-visible buffer.
 pub struct ImageDownload {
     image: Arc<Image>,
     level: u32,
@@ -36,7 +37,8 @@ impl ImageDownload {
         let full = image.desc.extent;
         let shrink = |v: u32| (v >> level).max(1);
         let e = vk::Extent3D { width: shrink(full.width), height: shrink(full.height), depth: shrink(full.depth) };
-        let size = e.width as u64 * e.height as u64 * e.depth as u64 * bytes_per_texel(image.desc.format);
+        let texels = e.width as u64 * e.height as u64 * e.depth as u64 * image.desc.layers as u64;
+        let size = texels * bytes_per_texel(image.desc.format);
         Ok(ImageDownload {
             buffer: Arc::new(Buffer::new(
                 ctx,
@@ -55,8 +57,8 @@ impl ImageDownload {
     /// The bytes of the last completed copy.
     pub fn bytes(&self) -> &[u8] {
         let e = self.extent;
-        let n =
-            e.width as usize * e.height as usize * e.depth as usize * bytes_per_texel(self.image.desc.format) as usize;
+        let texels = e.width as usize * e.height as usize * e.depth as usize * self.image.desc.layers as usize;
+        let n = texels * bytes_per_texel(self.image.desc.format) as usize;
         &self.buffer.mapped().expect("host-visible readback")[..n]
     }
 }
@@ -78,6 +80,7 @@ impl Pass for ImageDownload {
                 &[vk::BufferImageCopy {
                     image_subresource: vk::ImageSubresourceLayers {
                         mip_level: self.level,
+                        layer_count: self.image.desc.layers,
                         ..self.image.copy_region().image_subresource
                     },
                     image_extent: self.extent,

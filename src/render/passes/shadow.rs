@@ -2,11 +2,11 @@
 //! one depth array. Runs only when the scene has a light that casts shadows, and draws only
 //! the views whose inputs changed since they were last drawn (`render::reuse`).
 //!
-//! Without moving casters one pass draws every caster. With moving casters the static ones
-//! are drawn into a cached copy of the maps (when a view changed), the cache is copied into
-//! the maps, and the moving casters are drawn over it (when they or a view changed). Depth
-//! keeps the nearest fragment whatever the order of the draws, so the maps hold the same
-//! bytes as one pass over every caster.
+//! A view that changed (its light moved, or a cascade with the camera) is drawn with every
+//! caster. Where casters move, a view that stands still keeps its static casters in a cache:
+//! they are drawn there once, and each frame in which the casters move copies the cache into
+//! the maps and draws the moving casters over it. Depth keeps the nearest fragment whatever
+//! the order of the draws, so the maps hold the same bytes as one pass over every caster.
 
 use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, GraphicsDesc, Image, Pipeline};
 use crate::render::graph::{Pass, Use};
@@ -19,7 +19,7 @@ use std::sync::Arc;
 /// Which casters a shadow pass draws, and from what it starts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Casters {
-    /// Every caster, over cleared views (a scene without moving casters).
+    /// Every caster, over cleared views.
     All,
     /// The casters that never move, over cleared views (into the cache).
     Static,
@@ -267,20 +267,22 @@ impl Pass for ShadowCopyPass {
     }
 }
 
-/// The moving casters' passes: the cache copied into the maps, the moving casters over it.
-pub struct MovingCasters {
-    /// The static casters' maps, drawn only when a view changes.
+/// With moving casters: the static casters' maps cached, copied into the maps, and the moving
+/// casters drawn over the copy.
+pub struct CachedCasters {
+    /// The static casters' maps of the views that stand still while the casters move.
     pub cache: Arc<Image>,
+    pub statics: ShadowPass,
     pub copy: ShadowCopyPass,
-    pub draw: ShadowPass,
+    pub moving: ShadowPass,
 }
 
 /// The shadow maps' passes and what the maps hold (`reuse::ShadowCache`).
 pub struct ShadowMaps {
-    /// Every caster, or with moving casters the static ones into the cache.
-    pub draw: ShadowPass,
-    pub moving: Option<MovingCasters>,
-    cache: RefCell<crate::render::reuse::ShadowCache>,
+    /// Every caster, into the views that changed.
+    pub all: ShadowPass,
+    pub cached: Option<CachedCasters>,
+    held: RefCell<crate::render::reuse::ShadowCache>,
 }
 
 impl ShadowMaps {
@@ -294,48 +296,63 @@ impl ShadowMaps {
         cache: Option<&Arc<Image>>,
         views: u32,
     ) -> GpuResult<ShadowMaps> {
-        let (draw, moving) = match cache {
-            None => (ShadowPass::new(ctx, scene, frame, maps, views, Casters::All)?, None),
-            Some(cache) => (
-                ShadowPass::new(ctx, scene, frame, cache, views, Casters::Static)?,
-                Some(MovingCasters {
+        let cached = match cache {
+            None => None,
+            Some(cache) => {
+                let c = CachedCasters {
                     cache: cache.clone(),
+                    statics: ShadowPass::new(ctx, scene, frame, cache, views, Casters::Static)?,
                     copy: ShadowCopyPass::new(cache, maps, views),
-                    draw: ShadowPass::new(ctx, scene, frame, maps, views, Casters::Moving)?,
-                }),
-            ),
+                    moving: ShadowPass::new(ctx, scene, frame, maps, views, Casters::Moving)?,
+                };
+                // The first frame draws every view from scratch.
+                c.set_views(&[], &[]);
+                Some(c)
+            }
         };
-        Ok(ShadowMaps { draw, moving, cache: RefCell::default() })
+        let all = ShadowPass::new(ctx, scene, frame, maps, views, Casters::All)?;
+        Ok(ShadowMaps { all, cached, held: RefCell::default() })
     }
 
     /// Plan the next frame's draws for its `views` and `instances` (the instance table).
     pub fn plan(&self, views: &[crate::render::lights::GpuShadowView], instances: &[u8]) {
-        let moving = self.moving.as_ref().map(|_| instances);
-        let draws = self.cache.borrow_mut().plan(views, moving);
-        self.draw.set_views(&draws.statics);
-        if let Some(m) = &self.moving {
-            m.copy.set_views(&draws.moving);
-            m.draw.set_views(&draws.moving);
+        let moving = self.cached.as_ref().map(|_| instances);
+        let draws = self.held.borrow_mut().plan(views, moving);
+        self.all.set_views(&draws.all);
+        if let Some(c) = &self.cached {
+            c.set_views(&draws.statics, &draws.moving);
         }
     }
 
     /// After a frame is recorded: the next one draws what its plan says, else nothing.
     pub fn recorded(&self) {
-        self.draw.set_views(&[]);
-        if let Some(m) = &self.moving {
-            m.copy.set_views(&[]);
-            m.draw.set_views(&[]);
+        self.all.set_views(&[]);
+        if let Some(c) = &self.cached {
+            c.set_views(&[], &[]);
         }
     }
 
     /// The passes the next frame runs (none when every view is as drawn).
     pub fn push<'a>(&'a self, passes: &mut Vec<&'a dyn Pass>) {
-        if self.draw.draws() {
-            passes.push(&self.draw);
+        if self.all.draws() {
+            passes.push(&self.all);
         }
-        if let Some(m) = self.moving.as_ref().filter(|m| m.draw.draws()) {
-            passes.push(&m.copy);
-            passes.push(&m.draw);
+        if let Some(c) = &self.cached {
+            if c.statics.draws() {
+                passes.push(&c.statics);
+            }
+            if c.moving.draws() {
+                passes.push(&c.copy);
+                passes.push(&c.moving);
+            }
         }
+    }
+}
+
+impl CachedCasters {
+    fn set_views(&self, statics: &[u32], moving: &[u32]) {
+        self.statics.set_views(statics);
+        self.copy.set_views(moving);
+        self.moving.set_views(moving);
     }
 }
