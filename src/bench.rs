@@ -385,6 +385,10 @@ pub struct Measure {
     /// and scene time advances by this many seconds per frame. `None`: a static scene, where
     /// frames after the first reuse the lit voxels.
     pub dynamic_dt: Option<f32>,
+    /// Every frame updates the voxels and redraws what it could reuse (shadow maps, reflective
+    /// shadow maps and the volume built from them), as if everything had changed
+    /// (`Renderer::request_redraw`).
+    pub redraw: bool,
 }
 
 impl Measure {
@@ -495,8 +499,11 @@ fn render_timed_frames(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::R
 /// Render frame `i` of `m` (asking for a voxel update in the dynamic scenario); returns when
 /// it started on the host.
 fn render_frame(r: &mut Renderer, scene: &Scene, m: &Measure, i: u32) -> crate::Result<Instant> {
-    if m.dynamic_dt.is_some() {
+    if m.dynamic_dt.is_some() || m.redraw {
         r.request_voxel_update();
+    }
+    if m.redraw {
+        r.request_redraw();
     }
     let start = Instant::now();
     r.render(m.time_of(scene, i), false)?;

@@ -951,10 +951,11 @@ fn measure_config(
         warmup: opts.warmup,
         frames_in_flight: 2,
         serial_profile: false,
-        dynamic_dt: Some(0.0),
+        dynamic_dt: None,
+        redraw: true,
     };
     let (update, _) = measure_renderer(&mut r, scene, &m)?;
-    m.dynamic_dt = None;
+    m.redraw = false;
     let (cached, _) = measure_renderer(&mut r, scene, &m)?;
     r.render(t, true)?;
     let frame = r.output();

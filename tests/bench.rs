@@ -79,6 +79,11 @@ fn bench_smoke_writes_schema_valid_json_and_a_timeline() {
             if scenario == "static" {
                 assert_eq!(Some(o), typed.modes[0].occupancy, "{}", m.mode);
             }
+            // Nothing the shadow maps are drawn from changes in the static scene: the first
+            // (warm-up) frame draws them, no timed frame does. The dynamic scene's light
+            // circles: every frame draws its views.
+            let shadows = m.passes.iter().any(|p| p.name.starts_with("shadow map"));
+            assert_eq!(shadows, scenario == "dynamic", "{}: {:?}", m.mode, m.passes);
             // The bricked layout: the resident full-resolution bricks are the occupied 8^3 bricks
             // and those whose aprons hold an occupied voxel, in a map of (16 / 8 + 1)^3 bricks.
             let v = m.voxel_memory.as_ref().expect("the voxel layout");
@@ -108,6 +113,34 @@ fn bench_smoke_writes_schema_valid_json_and_a_timeline() {
             assert!(picture.contains(lane), "{lane} lane missing");
         }
         assert!(picture.contains("<title>cone trace (compute)"), "a cone-trace bar on the compute lane");
+    }
+}
+
+/// `--scenario redraw`: nothing moves, yet every frame draws what a static frame reuses (the
+/// shadow maps, the reflective shadow maps, the propagation volume's injection and
+/// propagation): the cost of a frame in which everything changed, in a scene without motion.
+/// The static scenario's timed frames (after one warm-up frame) draw none of them.
+#[test]
+fn the_redraw_scenario_draws_every_map_every_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let mut args = vec!["--scene", "scenes/cornell-box.toml", "--modes", "sync", "--frames", "2", "--warmup", "1"];
+    args.extend(["--width", "16", "--height", "16", "--set", "gi.mode=\"lpv\"", "--set", "gi.rsm_size=32"]);
+    args.extend(["--set", "gi.lpv_resolution=8", "--error-frames", "0", "--json", json.to_str().unwrap()]);
+    for scenario in ["redraw", "static"] {
+        let o = bench(&[&args[..], &["--scenario", scenario]].concat());
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let errors: Vec<String> = schema().iter_errors(&report).map(|e| format!("{e}")).collect();
+        assert!(errors.is_empty(), "schema errors: {errors:#?}");
+        let typed: dvsgi::bench::Report = serde_json::from_value(report).unwrap();
+        assert_eq!(typed.scenario, scenario);
+        let passes = &typed.modes[0].passes;
+        for pass in ["shadow maps", "reflective shadow maps", "lpv inject", "lpv propagate"] {
+            let ran = passes.iter().any(|p| p.name == pass);
+            assert_eq!(ran, scenario == "redraw", "{scenario}: {pass} in {passes:?}");
+        }
+        assert!(passes.iter().any(|p| p.name == "lpv lookup"), "{scenario}: {passes:?}");
     }
 }
 

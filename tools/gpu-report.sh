@@ -13,7 +13,8 @@
 #   tests.log              the test suite, validation on (any validation message fails a test)
 #   bench-*.json/.svg/.txt bench, static and dynamic, Cornell box and Sponza, 1920x1080,
 #                          128^3 and 256^3 voxels, sync / async / async-lagged (JSON, timeline, table);
-#                          bench-{cornell,sponza}-{rsm,lpv,rsm-lpv}: the other techniques, static
+#                          bench-{cornell,sponza}-{rsm,lpv,rsm-lpv}: the other techniques, every
+#                          frame redrawn (--scenario redraw: their maps and volume as if the light moved)
 #   bench-layout-*         the voxel layouts (issue 27): Sponza at 128^3, 256^3 and 512^3, bricks
 #                          and dense, sync, 1920x1080; info-layouts.txt: their memory
 #   bench-reflect-*       the reflections (issue 28): the mirror and glossy Cornell boxes with the
@@ -209,12 +210,13 @@ want layouts && for v in "${layout_res[@]}"; do
   done
 done
 
-# ----- 3b. The study's other techniques and its mix (issue 18): static, all modes. -----
+# ----- 3b. The study's other techniques and its mix (issue 18), all modes: every frame redraws -----
+# the maps and the volume (in a static scene a frame reuses them: issue 41).
 want techniques && for run in "cornell cornell-box" "sponza sponza"; do
   read -r name scene <<<"$run"
   for mode in rsm lpv rsm+lpv; do
     tag="$name-${mode/+/-}"
-    step "bench-$tag" 300 "$bin/bench" --scene "scenes/$scene.toml" --modes sync,async,async-lagged \
+    step "bench-$tag" 300 "$bin/bench" --scene "scenes/$scene.toml" --scenario redraw --modes sync,async,async-lagged \
       --width "$w" --height "$h" --set "gi.mode=\"$mode\"" --frames "$frames" --warmup "$warmup" \
       --json "$out/bench-$tag.json" --timeline "$out/bench-$tag.svg" >"$out/bench-$tag.txt" 2>&1
   done

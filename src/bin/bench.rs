@@ -21,6 +21,10 @@ enum Scenario {
     /// Scene time advances by --dt each frame and the voxels are revoxelized, relit and
     /// bounced every frame (needs a scene with moving objects or lights).
     Dynamic,
+    /// Nothing moves, but every frame updates the voxels and redraws every map a frame could
+    /// reuse (shadow maps, reflective shadow maps and the volume built from them) as if the
+    /// lights and casters had moved: what a frame costs when everything changes, in any scene.
+    Redraw,
 }
 
 #[derive(Parser)]
@@ -137,7 +141,7 @@ fn load_bench_scene(args: &Args) -> dvsgi::Result<Scene> {
     if let Some(h) = args.height {
         extra.push(("render.height".to_string(), h.to_string()));
     }
-    if args.scenario == Scenario::Dynamic {
+    if args.scenario != Scenario::Static {
         extra.push(("gi.update_interval".to_string(), "1".to_string()));
     }
     let scene = args.common.load_scene(&args.scene, &extra)?;
@@ -242,6 +246,7 @@ fn measure_spec(args: &Args, mode: Mode) -> Measure {
         frames_in_flight: args.frames_in_flight,
         serial_profile: args.serial_profile,
         dynamic_dt: (args.scenario == Scenario::Dynamic).then_some(args.dt),
+        redraw: args.scenario == Scenario::Redraw,
     }
 }
 
@@ -258,9 +263,13 @@ fn image_error(ctx: &Arc<Context>, scene: &Scene, args: &Args, mode: Mode) -> dv
     let mut errors = Vec::new();
     for i in 0..args.error_frames {
         let t = time_of(scene, args, i);
-        if args.scenario == Scenario::Dynamic {
+        if args.scenario != Scenario::Static {
             reference.request_voxel_update();
             other.request_voxel_update();
+        }
+        if args.scenario == Scenario::Redraw {
+            reference.request_redraw();
+            other.request_redraw();
         }
         reference.render(t, true)?;
         other.render(t, true)?;

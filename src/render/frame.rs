@@ -655,6 +655,16 @@ impl FramePasses {
         })
     }
 
+    /// Forget what the maps hold: the next frame that needs them draws them all.
+    pub fn forget_reuse(&self) {
+        if let Some(s) = &self.shadow {
+            s.forget();
+        }
+        if let Some(r) = &self.rsm {
+            *r.seen.borrow_mut() = InputsSeen::default();
+        }
+    }
+
     /// The voxel volumes and the cone tracer's targets that exist.
     pub fn gi_images(&self) -> Vec<&Arc<Image>> {
         let mut out = Vec::new();

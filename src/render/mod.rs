@@ -123,6 +123,8 @@ pub struct Renderer {
     frame_index: u64,
     /// The voxels are updated on the next frame whatever the policy says.
     update_requested: bool,
+    /// The next frame redraws what it could reuse (`render::reuse`).
+    redraw_requested: bool,
     /// The lights as last written, to relight the voxels when they change.
     last_lights: Vec<u8>,
     /// Whether the next frame relights (lights changed since the last relight).
@@ -219,6 +221,7 @@ impl Renderer {
             static_voxelized: false,
             frame_index: 0,
             update_requested: false,
+            redraw_requested: false,
             last_lights: Vec::new(),
             lights_changed: true,
             last_passes: Vec::new(),
@@ -281,6 +284,14 @@ impl Renderer {
     /// whatever `gi.update_interval` says.
     pub fn request_voxel_update(&mut self) {
         self.update_requested = true;
+    }
+
+    /// Redraw on the next frame everything a frame could reuse (the shadow maps, the reflective
+    /// shadow maps and the volume built from them) as if the lights and casters had moved: what
+    /// a frame costs when everything changes (`bench --scenario redraw`, the sweep's update
+    /// frames).
+    pub fn request_redraw(&mut self) {
+        self.redraw_requested = true;
     }
 
     /// GPU memory of the scene's textures with their mip chains.
@@ -525,6 +536,9 @@ impl Renderer {
         let written = self.update(t);
         let history = self.reflection_history(t, written.lights_moved);
         let state = self.frame_state(readback);
+        if std::mem::take(&mut self.redraw_requested) {
+            self.passes.forget_reuse();
+        }
         if let (true, Some(shadow)) = (self.passes.samples_shadow_maps(state), &self.passes.shadow) {
             shadow.plan(&written.views, &written.instances);
         }

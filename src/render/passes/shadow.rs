@@ -324,6 +324,11 @@ impl ShadowMaps {
         }
     }
 
+    /// Forget what the maps and the cache hold: the next plan draws every view.
+    pub fn forget(&self) {
+        *self.held.borrow_mut() = Default::default();
+    }
+
     /// After a frame is recorded: the next one draws what its plan says, else nothing.
     pub fn recorded(&self) {
         self.all.set_views(&[]);
