@@ -109,6 +109,52 @@ pub struct ModeReport {
     /// without voxels).
     #[serde(default)]
     pub voxel_memory: Option<crate::render::bricks::VoxelMemory>,
+    /// `--raster-profile`: what the G-buffer's time is made of (absent without it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub raster: Option<RasterReport>,
+}
+
+/// `--raster-profile` (`render::raster_profile`): the G-buffer, a depth prepass of its opaque
+/// draws and the G-buffer over that prepass, each submitted alone, three times.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RasterReport {
+    /// The G-buffer's pixels, and those a surface covers.
+    pub pixels: u64,
+    pub covered_pixels: u64,
+    pub passes: Vec<RasterPassReport>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RasterPassReport {
+    pub name: String,
+    pub gpu_ms: Option<Stats>,
+    pub serial_host_ms: Option<Stats>,
+    /// Primitives and shader invocations (where the device has pipeline statistics queries).
+    pub counts: Option<crate::render::raster_profile::ShaderCounts>,
+}
+
+impl RasterReport {
+    fn of(s: crate::render::raster_profile::RasterSamples) -> RasterReport {
+        let passes = s
+            .passes
+            .into_iter()
+            .map(|p| RasterPassReport {
+                name: p.name,
+                gpu_ms: Stats::of(&p.gpu_ms),
+                serial_host_ms: Stats::of(&p.host_ms),
+                counts: p.counts,
+            })
+            .collect();
+        RasterReport { pixels: s.pixels, covered_pixels: s.covered_pixels, passes }
+    }
+
+    /// Fragment shader invocations of pass `i` per covered pixel.
+    pub fn overdraw(&self, i: usize) -> Option<f64> {
+        let c = self.passes.get(i)?.counts?;
+        (self.covered_pixels > 0).then(|| c.fragment_invocations as f64 / self.covered_pixels as f64)
+    }
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -381,6 +427,8 @@ pub struct Measure {
     pub frames_in_flight: u32,
     /// Afterwards, submit every pass alone for three frames and host-time it.
     pub serial_profile: bool,
+    /// Afterwards, split the G-buffer's time (`Renderer::raster_profile`, three rounds).
+    pub raster_profile: bool,
     /// The dynamic scenario: every frame updates the voxels (revoxelize, relight, bounces)
     /// and scene time advances by this many seconds per frame. `None`: a static scene, where
     /// frames after the first reuse the lit voxels.
@@ -418,6 +466,7 @@ pub fn measure_renderer(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::
     let timings: Vec<_> = r.take_timings().into_iter().filter(|f| f.frame >= m.warmup as u64).collect();
     let calibrated = timings.iter().all(|f| f.calibrated);
     let serial = if m.serial_profile { serial_profile(r, scene, m)? } else { Vec::new() };
+    let raster = if m.raster_profile { Some(RasterReport::of(r.raster_profile(3)?)) } else { None };
     let passes = pass_reports(&timings, &serial);
     let with_stamps: Vec<_> = timings.iter().filter(|f| !f.passes.is_empty()).collect();
     let span: Vec<f64> = with_stamps.iter().map(|f| f.gpu_span_ms()).collect();
@@ -439,6 +488,7 @@ pub fn measure_renderer(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::
         // Read after the measured frames (a readback of its own, never inside a frame).
         occupancy: r.voxel_list()?.map(|l| l.occupancy()),
         voxel_memory: r.voxel_memory()?,
+        raster,
     };
     Ok((report, calibrated))
 }

@@ -951,6 +951,7 @@ fn measure_config(
         warmup: opts.warmup,
         frames_in_flight: 2,
         serial_profile: false,
+        raster_profile: false,
         dynamic_dt: None,
         redraw: true,
     };

@@ -144,6 +144,40 @@ fn the_redraw_scenario_draws_every_map_every_frame() {
     }
 }
 
+/// `--raster-profile` splits the G-buffer: the pass, a depth prepass of its opaque draws and
+/// the G-buffer over that depth, each timed; with pipeline statistics (lavapipe has them), the
+/// pass over the prepass shades each covered pixel exactly once (no alpha masks here), the
+/// frame's pass at least once, and both draw the scene's triangles.
+#[test]
+fn the_raster_profile_splits_the_gbuffer() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("bench.json");
+    let mut args = vec!["--scene", "scenes/cornell-box.toml", "--modes", "sync", "--frames", "1", "--warmup", "0"];
+    args.extend(["--width", "32", "--height", "32", "--set", "gi.mode=\"none\"", "--error-frames", "0"]);
+    args.extend(["--raster-profile", "--json", json.to_str().unwrap()]);
+    let o = bench(&args);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(out.contains("raster profile (sync): 1024 pixels"), "{out}");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let errors: Vec<String> = schema().iter_errors(&report).map(|e| format!("{e}")).collect();
+    assert!(errors.is_empty(), "schema errors: {errors:#?}");
+    let typed: dvsgi::bench::Report = serde_json::from_value(report).unwrap();
+    let r = typed.modes[0].raster.as_ref().expect("the raster profile");
+    let names: Vec<&str> = r.passes.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(names, ["gbuffer", "gbuffer depth prepass (opaque draws)", "gbuffer over the prepass"]);
+    assert!(r.covered_pixels > 0 && r.covered_pixels <= r.pixels, "{r:?}");
+    assert!(r.passes.iter().all(|p| p.serial_host_ms.is_some_and(|s| s.median > 0.0)), "{r:?}");
+    if let (Some(full), Some(over)) = (r.passes[0].counts, r.passes[2].counts) {
+        assert_eq!(over.fragment_invocations, r.covered_pixels, "{r:?}");
+        assert!(full.fragment_invocations >= r.covered_pixels, "{r:?}");
+        let triangles = dvsgi::scene::load(&common::repo().join("scenes/cornell-box.toml"), &Default::default())
+            .unwrap()
+            .triangle_count() as u64;
+        assert_eq!((full.primitives, over.primitives), (triangles, triangles), "{r:?}");
+    }
+}
+
 #[test]
 fn bench_rejects_impossible_requests_without_writing() {
     let dir = tempfile::tempdir().unwrap();

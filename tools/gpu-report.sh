@@ -5,7 +5,7 @@
 #   tools/gpu-report.sh [--bundle DIR] [--only GROUPS] OUT_DIR
 #
 # GROUPS (comma-separated; default all): info, tests, bench, layouts, techniques, reflections,
-# serial, sweep, accuracy, curves.
+# serial, raster, sweep, accuracy, curves.
 # Runs into an existing OUT_DIR add to it (steps.tsv appends), so a report can be split across
 # several shorter sessions on the GPU machine; README.md is rewritten from all of OUT_DIR.
 #
@@ -25,6 +25,9 @@
 #   sweep-cornell/         a short speed/accuracy sweep against the path-traced reference, with
 #                          rows for rsm, lpv and rsm+lpv on the same frontier
 #   serial-*.json/.txt     the serial profile (every pass submitted alone and host-timed)
+#   raster-*.json/.txt     the G-buffer's time split (issue 41, bench --raster-profile): the pass, a
+#                          depth prepass of its opaque draws, the G-buffer over that depth, with the
+#                          shader invocations and overdraw; Sponza and Crytek's Sponza, direct light
 #   accuracy-sponza/       Dabrovic's Sponza at 128^3, 256^3 and 512^3, dense and bricks, against a
 #                          4096-spp reference, whole image and by region (compare --scene --ref-direct)
 #   curves/                per-pass cost against voxel resolution, pixels and triangles, with
@@ -245,6 +248,12 @@ want serial && for run in "cornell cornell-box ${res[0]}" "sponza sponza ${res[1
   step "serial-$name-v$v" 300 "$bin/bench" --scene "scenes/$scene.toml" --modes sync,async \
     --width "$w" --height "$h" --set "gi.voxel_resolution=$v" --frames "$frames" --warmup "$warmup" \
     --serial-profile --json "$out/serial-$name-v$v.json" >"$out/serial-$name-v$v.txt" 2>&1
+done
+# ----- 4a. The G-buffer's time split (issue 41): vertex and raster, fragments, overdraw. -----
+want raster && for scene in sponza crytek-sponza; do
+  step "raster-$scene" 300 "$bin/bench" --scene "scenes/$scene.toml" --modes sync --width "$w" --height "$h" \
+    --set 'gi.mode="none"' --frames 3 --warmup 1 --error-frames 0 --raster-profile \
+    --json "$out/raster-$scene.json" >"$out/raster-$scene.txt" 2>&1
 done
 
 # ----- 5. A short sweep against the path-traced reference. -----

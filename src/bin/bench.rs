@@ -72,6 +72,12 @@ struct Args {
     /// timestamps cannot be trusted (lavapipe). Runs 3 extra frames per mode.
     #[arg(long)]
     serial_profile: bool,
+    /// Also split the G-buffer's time: the pass, a depth prepass of its opaque draws (vertex,
+    /// raster, depth) and the G-buffer over that depth (each covered pixel shaded once), each
+    /// submitted alone three times; with pipeline statistics, the shader invocations and the
+    /// overdraw.
+    #[arg(long)]
+    raster_profile: bool,
     /// Frames compared against sync to measure each mode's image error (0: skip).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=10_000))]
     error_frames: u32,
@@ -245,6 +251,7 @@ fn measure_spec(args: &Args, mode: Mode) -> Measure {
         warmup: args.warmup,
         frames_in_flight: args.frames_in_flight,
         serial_profile: args.serial_profile,
+        raster_profile: args.raster_profile,
         dynamic_dt: (args.scenario == Scenario::Dynamic).then_some(args.dt),
         redraw: args.scenario == Scenario::Redraw,
     }
@@ -308,12 +315,31 @@ fn print_table(ctx: &Context, r: &Report) {
         outln!("{}", v.summary()[0]);
     }
     t.row("host waits: in frame / slot reuse", &|m| format!("{} / {}", m.host_waits.in_frame, m.host_waits.slot_reuse));
+    for m in r.modes.iter().filter(|m| m.raster.is_some()) {
+        print_raster(&m.mode, m.raster.as_ref().expect("raster"));
+    }
     if ctx.info.is_cpu() {
         outln!(
             "note: {} is a CPU implementation; its GPU timestamps can be wrong — compare host wall-clock \
              figures (and --serial-profile for per-pass host times)",
             ctx.info.name
         );
+    }
+}
+
+/// `--raster-profile`: each pass's times and counts, and the overdraw.
+fn print_raster(mode: &str, r: &dvsgi::bench::RasterReport) {
+    let covered = 100.0 * r.covered_pixels as f64 / r.pixels.max(1) as f64;
+    outln!("raster profile ({mode}): {} pixels, {covered:.1}% covered", r.pixels);
+    for (i, p) in r.passes.iter().enumerate() {
+        let counts = match (p.counts, r.overdraw(i)) {
+            (Some(c), Some(o)) => format!(
+                "; {} triangles, {} vertex and {} fragment invocations ({o:.2} per covered pixel)",
+                c.primitives, c.vertex_invocations, c.fragment_invocations
+            ),
+            _ => String::new(),
+        };
+        outln!("  {}: GPU {} ms, serial host {} ms{counts}", p.name, fmt_stats(p.gpu_ms), fmt_stats(p.serial_host_ms));
     }
 }
 

@@ -720,14 +720,16 @@ fn print_device(ctx: &Context) {
     let yn = |b: bool| if b { "yes" } else { "no" };
     outln!(
         "  optional: geometryShader {} fragmentStoresAndAtomics {} depthClamp {} samplerAnisotropy {} \
-         conservativeRasterization {} calibratedTimestamps {} shaderImageFloat32Atomics {}",
+         conservativeRasterization {} calibratedTimestamps {} shaderImageFloat32Atomics {} \
+         pipelineStatisticsQuery {}",
         yn(o.geometry_shader),
         yn(o.fragment_stores_and_atomics),
         yn(o.depth_clamp),
         yn(o.sampler_anisotropy),
         yn(o.conservative_rasterization),
         yn(o.calibrated_timestamps),
-        yn(o.shader_image_float32_atomics)
+        yn(o.shader_image_float32_atomics),
+        yn(o.pipeline_statistics_query)
     );
     outln!(
         "  ray queries (VK_KHR_ray_query + VK_KHR_acceleration_structure, for gi.specular = \"rt\"): {}",

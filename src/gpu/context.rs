@@ -59,6 +59,8 @@ pub struct OptionalFeatures {
     pub conservative_rasterization: bool,
     pub calibrated_timestamps: bool,
     pub shader_image_float32_atomics: bool,
+    /// Pipeline statistics queries (`bench --raster-profile` counts shader invocations).
+    pub pipeline_statistics_query: bool,
     /// VK_KHR_ray_query with VK_KHR_acceleration_structure (and buffer device addresses):
     /// `gi.specular = "rt"`.
     pub ray_query: bool,
@@ -371,6 +373,7 @@ impl Negotiated {
             conservative_rasterization: has_ext(ash::ext::conservative_rasterization::NAME),
             calibrated_timestamps: has_ext(ash::ext::calibrated_timestamps::NAME),
             shader_image_float32_atomics: ext_float && has_float.shader_image_float32_atomics != 0,
+            pipeline_statistics_query: core.pipeline_statistics_query != 0,
             ray_query: ext_rays
                 && has_accel.acceleration_structure != 0
                 && has_query.ray_query != 0
@@ -700,6 +703,7 @@ impl Context {
             .fragment_stores_and_atomics(o.fragment_stores_and_atomics)
             .depth_clamp(o.depth_clamp)
             .sampler_anisotropy(o.sampler_anisotropy)
+            .pipeline_statistics_query(o.pipeline_statistics_query)
             .shader_storage_image_write_without_format(has10.shader_storage_image_write_without_format != 0)
             .shader_storage_image_read_without_format(has10.shader_storage_image_read_without_format != 0)
             .independent_blend(has10.independent_blend != 0)

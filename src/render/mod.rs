@@ -9,6 +9,7 @@ pub mod graph;
 pub mod lights;
 pub mod lpv;
 pub mod passes;
+pub mod raster_profile;
 pub mod rays;
 pub mod reuse;
 pub mod scene_gpu;
@@ -425,6 +426,60 @@ impl Renderer {
             None => ("dense", Vec::new()),
         };
         Ok(Some(bricks::VoxelMemory { layout: layout.to_string(), bytes: images + lists, dense_bytes, pools }))
+    }
+
+    /// `bench --raster-profile` (`render::raster_profile`): `rounds` times, the frame's G-buffer
+    /// pass, a depth prepass of its opaque draws and the G-buffer over that prepass, each
+    /// submitted alone and timed. After a frame (the G-buffer reads its uniforms) and after the
+    /// frames' timings were taken (this takes its own and drops the rest).
+    pub fn raster_profile(&mut self, rounds: u32) -> GpuResult<raster_profile::RasterSamples> {
+        use passes::gbuffer::GBufferVariant;
+        use raster_profile::{Counted, RasterPassSamples, StatisticsPool};
+        let ctx = self.ctx.clone();
+        let full = &self.passes.gbuffer;
+        let prepass = full.with_variant(&ctx, GBufferVariant::DepthPrepass)?;
+        let over = full.with_variant(&ctx, GBufferVariant::OverPrepass)?;
+        let pool = if ctx.info.optional.pipeline_statistics_query { Some(StatisticsPool::new(&ctx, 2)?) } else { None };
+        let counted = |pass, query| pool.as_ref().map(|p| Counted { pass, pool: p.pool, query });
+        let (full_counted, over_counted) = (counted(full as &dyn Pass, 0), counted(&over as &dyn Pass, 1));
+        let list: [&dyn Pass; 3] = [
+            full_counted.as_ref().map_or(full as &dyn Pass, |c| c),
+            &prepass,
+            over_counted.as_ref().map_or(&over as &dyn Pass, |c| c),
+        ];
+        let mut out: Vec<RasterPassSamples> = list
+            .iter()
+            .map(|p| RasterPassSamples { name: p.name().into(), gpu_ms: vec![], host_ms: vec![], counts: None })
+            .collect();
+        self.scheduler.serial = true;
+        for round in 0..rounds as u64 {
+            // Frame numbers no frame uses, to find these timings.
+            let id = u64::MAX - round;
+            self.scheduler.begin(Some(id))?;
+            self.scheduler.record(&list)?;
+            self.scheduler.end(true)?;
+            for (o, s) in out.iter_mut().zip(self.scheduler.serial_times()) {
+                o.host_ms.push(s.host_ms);
+            }
+            let stamps = self.scheduler.timing_of(id).map(|t| t.passes.clone()).unwrap_or_default();
+            for (o, p) in out.iter_mut().zip(&stamps) {
+                o.gpu_ms.push(p.gpu_ms());
+            }
+        }
+        self.scheduler.serial = false;
+        self.scheduler.take_timings();
+        if let Some(p) = &pool {
+            let counts = p.read()?;
+            (out[0].counts, out[2].counts) = (Some(counts[0]), Some(counts[1]));
+        }
+        let g = full.gbuffer.clone();
+        let depth = self.download(&g.depth)?;
+        let pixels = g.depth.desc.texel_count();
+        Ok(raster_profile::RasterSamples {
+            pixels,
+            covered_pixels: raster_profile::covered_pixels(&depth),
+            passes: out,
+        })
     }
 
     /// The schedule mode of the next frames.

@@ -72,20 +72,82 @@ impl GBuffer {
     }
 }
 
+/// What a G-buffer pass draws. The frame runs `Full`; `bench --raster-profile` also runs a
+/// depth prepass and the G-buffer over it, to split the pass's time (`render::raster_profile`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GBufferVariant {
+    /// Every draw into every target, depth tested and written.
+    Full,
+    /// The opaque draws' depth alone: vertex, raster and depth work, no fragment shader.
+    DepthPrepass,
+    /// Over the prepass's depth: the opaque draws shaded where they are the nearest (depth
+    /// tested, not written: each covered pixel shaded once), then the alpha-masked draws as in
+    /// `Full`.
+    OverPrepass,
+}
+
 pub struct GBufferPass {
     pub gbuffer: Arc<GBuffer>,
+    variant: GBufferVariant,
     scene: Arc<SceneGpu>,
     frame: FrameBuffers,
+    /// The pipeline of the variant's opaque draws.
     pipeline: Pipeline,
+    /// `OverPrepass`: the masked draws' pipeline (depth written).
+    masked: Option<Pipeline>,
     set: DescriptorSet,
 }
 
+const COLOR_FORMATS: [vk::Format; 4] = [ALBEDO_FORMAT, NORMAL_FORMAT, SPECULAR_FORMAT, EMISSION_FORMAT];
+
+/// The G-buffer's pipeline: every target, or (`colors` false) depth only; depth written or not.
+fn pipeline(
+    ctx: &Arc<Context>,
+    scene: &SceneGpu,
+    set: &DescriptorSet,
+    colors: bool,
+    depth_write: bool,
+) -> GpuResult<Pipeline> {
+    Pipeline::graphics(
+        ctx,
+        "gbuffer",
+        &GraphicsDesc {
+            vertex_attributes: &[0, 1, 2],
+            vert: shaders::GBUFFER_VERT,
+            geom: None,
+            frag: colors.then_some(shaders::GBUFFER_FRAG),
+            color_formats: if colors { &COLOR_FORMATS } else { &[] },
+            depth_format: Some(DEPTH_FORMAT),
+            depth_test: true,
+            depth_write,
+            cull: vk::CullModeFlags::NONE,
+            depth_bias: false,
+            depth_clamp: false,
+            conservative: false,
+            spec: &[(0, scene.materials.texture_count())],
+        },
+        &[set.layout],
+        0,
+    )
+}
+
 impl GBufferPass {
+    /// The frame's G-buffer pass.
     pub fn new(
         ctx: &Arc<Context>,
         scene: &Arc<SceneGpu>,
         frame: &FrameBuffers,
         gbuffer: &Arc<GBuffer>,
+    ) -> GpuResult<Self> {
+        GBufferPass::variant(ctx, scene, frame, gbuffer, GBufferVariant::Full)
+    }
+
+    pub fn variant(
+        ctx: &Arc<Context>,
+        scene: &Arc<SceneGpu>,
+        frame: &FrameBuffers,
+        gbuffer: &Arc<GBuffer>,
+        variant: GBufferVariant,
     ) -> GpuResult<Self> {
         let [materials, textures] = scene.materials.binds();
         let set = DescriptorSet::new(
@@ -100,52 +162,35 @@ impl GBufferPass {
                 scene.materials.sampler_bind(),
             ],
         )?;
-        let pipeline = Pipeline::graphics(
-            ctx,
-            "gbuffer",
-            &GraphicsDesc {
-                vertex_attributes: &[0, 1, 2],
-                vert: shaders::GBUFFER_VERT,
-                geom: None,
-                frag: Some(shaders::GBUFFER_FRAG),
-                color_formats: &[ALBEDO_FORMAT, NORMAL_FORMAT, SPECULAR_FORMAT, EMISSION_FORMAT],
-                depth_format: Some(DEPTH_FORMAT),
-                depth_test: true,
-                depth_write: true,
-                cull: vk::CullModeFlags::NONE,
-                depth_bias: false,
-                depth_clamp: false,
-                conservative: false,
-                spec: &[(0, scene.materials.texture_count())],
-            },
-            &[set.layout],
-            0,
-        )?;
-        Ok(GBufferPass { gbuffer: gbuffer.clone(), scene: scene.clone(), frame: frame.clone(), pipeline, set })
+        let (pipeline, masked) = match variant {
+            GBufferVariant::Full => (pipeline(ctx, scene, &set, true, true)?, None),
+            GBufferVariant::DepthPrepass => (pipeline(ctx, scene, &set, false, true)?, None),
+            GBufferVariant::OverPrepass => {
+                (pipeline(ctx, scene, &set, true, false)?, Some(pipeline(ctx, scene, &set, true, true)?))
+            }
+        };
+        Ok(GBufferPass {
+            gbuffer: gbuffer.clone(),
+            variant,
+            scene: scene.clone(),
+            frame: frame.clone(),
+            pipeline,
+            masked,
+            set,
+        })
     }
-}
 
-impl Pass for GBufferPass {
-    fn name(&self) -> &str {
-        "gbuffer"
+    /// The same G-buffer drawn as `variant`.
+    pub fn with_variant(&self, ctx: &Arc<Context>, variant: GBufferVariant) -> GpuResult<GBufferPass> {
+        GBufferPass::variant(ctx, &self.scene, &self.frame, &self.gbuffer, variant)
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let g = &self.gbuffer;
-        let mut uses = vec![
-            Use::overwrite(&g.depth, Access::DepthAttachmentWrite),
-            Use::overwrite(&g.albedo, Access::ColorAttachmentWrite),
-            Use::overwrite(&g.normal, Access::ColorAttachmentWrite),
-            Use::overwrite(&g.specular, Access::ColorAttachmentWrite),
-            Use::overwrite(&g.emission, Access::ColorAttachmentWrite),
-            self.scene.instance_reads(),
-        ];
-        uses.extend(self.frame.reads(Access::GraphicsShaderReadBuffer));
-        uses
-    }
-    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
-        let g = &self.gbuffer;
-        let extent = g.depth.extent2d();
-        let colors: Vec<_> = g
+
+    /// The colour targets this variant writes, cleared.
+    fn color_attachments(&self) -> Vec<vk::RenderingAttachmentInfo<'static>> {
+        if self.variant == GBufferVariant::DepthPrepass {
+            return Vec::new();
+        }
+        self.gbuffer
             .colors()
             .iter()
             .map(|img| {
@@ -156,11 +201,44 @@ impl Pass for GBufferPass {
                     .store_op(vk::AttachmentStoreOp::STORE)
                     .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })
             })
-            .collect();
+            .collect()
+    }
+}
+
+impl Pass for GBufferPass {
+    fn name(&self) -> &str {
+        match self.variant {
+            GBufferVariant::Full => "gbuffer",
+            GBufferVariant::DepthPrepass => "gbuffer depth prepass (opaque draws)",
+            GBufferVariant::OverPrepass => "gbuffer over the prepass",
+        }
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        let g = &self.gbuffer;
+        // Over the prepass the depth is kept; the prepass writes no colour.
+        let depth = match self.variant {
+            GBufferVariant::OverPrepass => Use::image(&g.depth, Access::DepthAttachmentWrite),
+            _ => Use::overwrite(&g.depth, Access::DepthAttachmentWrite),
+        };
+        let mut uses = vec![depth, self.scene.instance_reads()];
+        if self.variant != GBufferVariant::DepthPrepass {
+            uses.extend(g.colors().map(|c| Use::overwrite(c, Access::ColorAttachmentWrite)));
+        }
+        uses.extend(self.frame.reads(Access::GraphicsShaderReadBuffer));
+        uses
+    }
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        let g = &self.gbuffer;
+        let extent = g.depth.extent2d();
+        let colors = self.color_attachments();
+        let load = match self.variant {
+            GBufferVariant::OverPrepass => vk::AttachmentLoadOp::LOAD,
+            _ => vk::AttachmentLoadOp::CLEAR,
+        };
         let depth = vk::RenderingAttachmentInfo::default()
             .image_view(g.depth.view)
             .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .load_op(load)
             .store_op(vk::AttachmentStoreOp::STORE)
             .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
         let info = vk::RenderingInfo::default()
@@ -172,7 +250,17 @@ impl Pass for GBufferPass {
             ctx.device.cmd_begin_rendering(cmd, &info);
             self.pipeline.bind(cmd, &[self.set.set]);
             super::set_viewport(ctx, cmd, extent);
-            self.scene.draw_all(ctx, cmd);
+            match (self.variant, &self.masked) {
+                (GBufferVariant::Full, _) => self.scene.draw_all(ctx, cmd),
+                (GBufferVariant::DepthPrepass, _) => self.scene.draw_where(ctx, cmd, |d| !d.masked),
+                (GBufferVariant::OverPrepass, masked) => {
+                    self.scene.draw_where(ctx, cmd, |d| !d.masked);
+                    if let Some(masked) = masked {
+                        masked.bind(cmd, &[self.set.set]);
+                        self.scene.draw_where(ctx, cmd, |d| d.masked);
+                    }
+                }
+            }
             ctx.device.cmd_end_rendering(cmd);
         }
     }
