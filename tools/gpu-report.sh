@@ -61,8 +61,8 @@ if [ $# -ne 1 ]; then
 fi
 for g in ${only//,/ }; do
   case "$g" in
-    info | tests | bench | layouts | techniques | reflections | serial | sweep | accuracy | curves) ;;
-    *) echo "gpu-report: unknown group '$g' (info, tests, bench, layouts, techniques, reflections, serial, sweep, accuracy, curves)" >&2; exit 2 ;;
+    info | tests | bench | layouts | techniques | reflections | serial | raster | sweep | accuracy | curves) ;;
+    *) echo "gpu-report: unknown group '$g' (info, tests, bench, layouts, techniques, reflections, serial, raster, sweep, accuracy, curves)" >&2; exit 2 ;;
   esac
 done
 # want GROUP: whether this run measures GROUP.
