@@ -842,9 +842,9 @@ fn frame_upload(frame: &FrameBuffers, scene_gpu: &SceneGpu, rays: Option<&RayPas
     UploadPass::new(uploads)
 }
 
-/// The shadow maps of `views` views of `size`² texels, one layer each. Without shadowed lights
-/// the lighting pass still binds a 1x1 placeholder map.
-/// The maps and their cache are copied into one another.
+/// The shadow maps of `views` views of `size`² texels, one layer each (copied to and from: the
+/// static casters' cache goes into the maps, and tests read them back). Without shadowed
+/// lights the lighting pass still binds a 1x1 placeholder map.
 fn shadow_atlas(ctx: &Arc<Context>, name: &str, size: u32, views: u32) -> GpuResult<Arc<Image>> {
     let (size, layers) = if views > 0 { (size, views) } else { (1, 1) };
     let usage = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
