@@ -16,8 +16,9 @@ pub struct ShadowCache {
     /// Per view: the view the cache of the static casters holds, if it holds one (only with
     /// moving casters, and only for views that stood still while the casters moved).
     cache: Vec<Option<GpuShadowView>>,
-    /// The instance table the moving casters were drawn with; `None` before the first draw.
-    instances: Option<Vec<u8>>,
+    /// The instance rows of the static and of the moving casters the maps were drawn with;
+    /// `None` before the first draw.
+    instances: Option<(Vec<u8>, Vec<u8>)>,
 }
 
 /// The views a frame draws.
@@ -39,17 +40,24 @@ fn same(a: &Option<GpuShadowView>, b: &GpuShadowView) -> bool {
 }
 
 impl ShadowCache {
-    /// The draws that bring the maps to `views` with the casters placed by `instances` (the
-    /// instance table; `None` where no caster moves), recorded as done: call it only for a
-    /// frame that records them.
-    pub fn plan(&mut self, views: &[GpuShadowView], instances: Option<&[u8]>) -> ShadowDraws {
+    /// The draws that bring the maps to `views` with the static casters placed by `statics`
+    /// and the moving ones by `moving` (their rows of the instance table; `moving` is empty
+    /// where nothing moves), recorded as done: call it only for a frame that records them. A
+    /// static caster whose transform was edited between frames redraws every view from
+    /// scratch and empties the cache.
+    pub fn plan(&mut self, views: &[GpuShadowView], statics: &[u8], moving: &[u8]) -> ShadowDraws {
         let n = views.len();
         self.maps.resize(n, None);
         self.cache.resize(n, None);
+        let held = self.instances.replace((statics.to_vec(), moving.to_vec()));
+        let edited = held.as_ref().is_some_and(|h| h.0 != statics);
+        let moved = held.as_ref().is_some_and(|h| h.1 != moving);
+        if edited {
+            self.cache.iter_mut().for_each(|c| *c = None);
+        }
         let mut draws = ShadowDraws::default();
-        let moved = instances.is_some_and(|now| self.instances.as_deref() != Some(now));
         for (i, view) in views.iter().enumerate() {
-            if !same(&self.maps[i], view) {
+            if !same(&self.maps[i], view) || edited {
                 draws.all.push(i as u32);
                 self.maps[i] = Some(*view);
             } else if moved {
@@ -59,9 +67,6 @@ impl ShadowCache {
                 }
                 draws.moving.push(i as u32);
             }
-        }
-        if let Some(now) = instances {
-            self.instances = Some(now.to_vec());
         }
         draws
     }
@@ -98,34 +103,41 @@ mod tests {
     fn without_moving_casters_only_the_views_that_changed_are_drawn() {
         let mut c = ShadowCache::default();
         let views = [view(1.0), view(2.0), view(3.0)];
-        assert_eq!(c.plan(&views, None), draws(&[0, 1, 2], &[], &[]), "the first frame draws every view");
-        assert_eq!(c.plan(&views, None), ShadowDraws::default());
+        assert_eq!(c.plan(&views, &[1], &[]), draws(&[0, 1, 2], &[], &[]), "the first frame draws every view");
+        assert_eq!(c.plan(&views, &[1], &[]), ShadowDraws::default());
         // A camera-fitted cascade moved: only it is drawn.
-        assert_eq!(c.plan(&[view(1.5), view(2.0), view(3.0)], None), draws(&[0], &[], &[]));
-        assert_eq!(c.plan(&[view(1.5), view(2.0), view(3.0)], None), ShadowDraws::default());
+        assert_eq!(c.plan(&[view(1.5), view(2.0), view(3.0)], &[1], &[]), draws(&[0], &[], &[]));
+        assert_eq!(c.plan(&[view(1.5), view(2.0), view(3.0)], &[1], &[]), ShadowDraws::default());
+        // A transform edited between frames, in a scene without motion: every view again.
+        assert_eq!(c.plan(&[view(1.5), view(2.0), view(3.0)], &[2], &[]), draws(&[0, 1, 2], &[], &[]));
     }
 
     #[test]
     fn moving_casters_are_drawn_over_the_cached_static_casters() {
         let mut c = ShadowCache::default();
         let views = [view(1.0), view(2.0)];
-        assert_eq!(c.plan(&views, Some(&[1, 2, 3, 4])), draws(&[0, 1], &[], &[]), "every caster, every view");
-        assert_eq!(c.plan(&views, Some(&[1, 2, 3, 4])), ShadowDraws::default(), "nothing moved");
+        assert_eq!(c.plan(&views, &[1, 2], &[3, 4]), draws(&[0, 1], &[], &[]), "every caster, every view");
+        assert_eq!(c.plan(&views, &[1, 2], &[3, 4]), ShadowDraws::default(), "nothing moved");
         // The casters moved: the static ones are cached, the copy gets the moving ones.
-        assert_eq!(c.plan(&views, Some(&[1, 2, 3, 5])), draws(&[], &[0, 1], &[0, 1]));
+        assert_eq!(c.plan(&views, &[1, 2], &[3, 5]), draws(&[], &[0, 1], &[0, 1]));
         // From then on only the moving casters are drawn.
-        assert_eq!(c.plan(&views, Some(&[1, 2, 3, 6])), draws(&[], &[], &[0, 1]));
+        assert_eq!(c.plan(&views, &[1, 2], &[3, 6]), draws(&[], &[], &[0, 1]));
         // A view changed (its light moved) as the casters moved: it is drawn from scratch,
         // and the other gets the moving casters over its cache.
         let turned = [view(1.0), view(9.0)];
-        assert_eq!(c.plan(&turned, Some(&[1, 2, 3, 7])), draws(&[1], &[], &[0]));
+        assert_eq!(c.plan(&turned, &[1, 2], &[3, 7]), draws(&[1], &[], &[0]));
         // It stands still now: its cache is drawn again before the moving casters go over it.
-        assert_eq!(c.plan(&turned, Some(&[1, 2, 3, 8])), draws(&[], &[1], &[0, 1]));
+        assert_eq!(c.plan(&turned, &[1, 2], &[3, 8]), draws(&[], &[1], &[0, 1]));
         // A view that changes every frame is drawn from scratch every frame, never cached.
         for k in 0..3 {
             let light = [view(1.0), view(10.0 + k as f32)];
-            assert_eq!(c.plan(&light, Some(&[1, 2, 4, k])), draws(&[1], &[], &[0]));
+            assert_eq!(c.plan(&light, &[1, 2], &[4, k]), draws(&[1], &[], &[0]));
         }
+        // A static caster's transform edited: every view from scratch, and the cache is drawn
+        // again once the casters move.
+        let still = [view(1.0), view(12.0)];
+        assert_eq!(c.plan(&still, &[1, 9], &[4, 2]), draws(&[0, 1], &[], &[]));
+        assert_eq!(c.plan(&still, &[1, 9], &[4, 3]), draws(&[], &[0, 1], &[0, 1]));
     }
 
     #[test]

@@ -283,6 +283,8 @@ pub struct ShadowMaps {
     pub all: ShadowPass,
     pub cached: Option<CachedCasters>,
     held: RefCell<crate::render::reuse::ShadowCache>,
+    /// Per draw (a row of the instance table): the caster moves.
+    moving_rows: Vec<bool>,
 }
 
 impl ShadowMaps {
@@ -311,13 +313,19 @@ impl ShadowMaps {
             }
         };
         let all = ShadowPass::new(ctx, scene, frame, maps, views, Casters::All)?;
-        Ok(ShadowMaps { all, cached, held: RefCell::default() })
+        let moving_rows = scene.draws.iter().map(|d| d.moving).collect();
+        Ok(ShadowMaps { all, cached, held: RefCell::default(), moving_rows })
     }
 
     /// Plan the next frame's draws for its `views` and `instances` (the instance table).
     pub fn plan(&self, views: &[crate::render::lights::GpuShadowView], instances: &[u8]) {
-        let moving = self.cached.as_ref().map(|_| instances);
-        let draws = self.held.borrow_mut().plan(views, moving);
+        // The instance table has one row per draw, in draw order.
+        let row = instances.len() / self.moving_rows.len().max(1);
+        let (mut statics, mut moving) = (Vec::new(), Vec::new());
+        for (bytes, &moves) in instances.chunks(row.max(1)).zip(&self.moving_rows) {
+            if moves { &mut moving } else { &mut statics }.extend_from_slice(bytes);
+        }
+        let draws = self.held.borrow_mut().plan(views, &statics, &moving);
         self.all.set_views(&draws.all);
         if let Some(c) = &self.cached {
             c.set_views(&draws.statics, &draws.moving);
