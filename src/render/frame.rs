@@ -577,12 +577,7 @@ impl FramePasses {
         refuse_rays_without_queries(ctx, s)?;
         let (width, height) = s.internal_size();
         let gbuffer = Arc::new(GBuffer::new(ctx, width, height)?);
-        let atlas = shadow_atlas(ctx, "shadow maps", s.shadow_map_size, shadow_views)?;
-        // With moving casters the static ones are drawn into a cache of the maps.
-        let shadow_cache = match (shadow_views, moving_casters(scene)) {
-            (1.., true) => Some(shadow_atlas(ctx, "shadow maps (static casters)", s.shadow_map_size, shadow_views)?),
-            _ => None,
-        };
+        let atlas = shadow_atlas(ctx, s.shadow_map_size, shadow_views)?;
         let (radiance, display, resolve) = output_images(ctx, s)?;
         let shown = resolve.as_ref().map_or(&radiance, |r| &r.resolved).clone();
         let voxel_view = !matches!(s.view, View::Final | View::Indirect | View::Ao);
@@ -625,11 +620,9 @@ impl FramePasses {
             placeholders: &placeholders,
         };
         let shading = Shading::new(ctx, scene, frame, voxels.as_ref(), lit)?;
-        let shadow = if shadow_views > 0 {
-            Some(ShadowMaps::new(ctx, scene_gpu, frame, &atlas, shadow_cache.as_ref(), shadow_views)?)
-        } else {
-            None
-        };
+        let shadow =
+            (shadow_views > 0).then(|| ShadowMaps::new(ctx, scene_gpu, frame, &atlas, shadow_views)).transpose()?;
+        let shadow_cache = shadow.as_ref().and_then(|s| s.cached.as_ref()).map(|c| c.cache.clone());
         Ok(FramePasses {
             upload: frame_upload(frame, scene_gpu, rays.as_ref()),
             voxels,
@@ -845,13 +838,13 @@ fn frame_upload(frame: &FrameBuffers, scene_gpu: &SceneGpu, rays: Option<&RayPas
 /// The shadow maps of `views` views of `size`² texels, one layer each (copied to and from: the
 /// static casters' cache goes into the maps, and tests read them back). Without shadowed
 /// lights the lighting pass still binds a 1x1 placeholder map.
-fn shadow_atlas(ctx: &Arc<Context>, name: &str, size: u32, views: u32) -> GpuResult<Arc<Image>> {
+fn shadow_atlas(ctx: &Arc<Context>, size: u32, views: u32) -> GpuResult<Arc<Image>> {
     let (size, layers) = if views > 0 { (size, views) } else { (1, 1) };
     let usage = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
         | vk::ImageUsageFlags::SAMPLED
         | vk::ImageUsageFlags::TRANSFER_SRC
         | vk::ImageUsageFlags::TRANSFER_DST;
-    let name = if views > 0 { name } else { "shadow map placeholder" };
+    let name = if views > 0 { "shadow maps" } else { "shadow map placeholder" };
     Image::new(ctx, name, ImageDesc::d2_array(SHADOW_FORMAT, size, size, layers, usage)).map(Arc::new)
 }
 
@@ -896,10 +889,11 @@ pub fn shadow_map_views(scene: &Scene) -> u32 {
     }
 }
 
-/// Some object moves (its transform changes with scene time): its shadow is drawn over a
-/// cache of the static casters' maps.
+/// Some object with geometry moves (its transform changes with scene time): its shadow is
+/// drawn over a cache of the static casters' maps (`ShadowMaps`, which finds the same from the
+/// draws; the budget counts the cache from this).
 pub fn moving_casters(scene: &Scene) -> bool {
-    scene.objects.iter().any(|o| !o.motion.is_static())
+    scene.objects.iter().any(|o| !o.motion.is_static() && !o.meshes.is_empty())
 }
 
 /// The direct light samples shadow maps: unless cones or rays shadow every light (they take

@@ -288,29 +288,28 @@ pub struct ShadowMaps {
 }
 
 impl ShadowMaps {
-    /// The passes that draw the `views` layers of `maps`; with moving casters, `cache` (an
-    /// image like `maps`) holds the static casters.
+    /// The passes that draw the `views` layers of `maps`; where casters move, the cache of the
+    /// static ones (an image like `maps`) and its passes too.
     pub fn new(
         ctx: &Arc<Context>,
         scene: &Arc<SceneGpu>,
         frame: &FrameBuffers,
         maps: &Arc<Image>,
-        cache: Option<&Arc<Image>>,
         views: u32,
     ) -> GpuResult<ShadowMaps> {
-        let cached = match cache {
-            None => None,
-            Some(cache) => {
-                let c = CachedCasters {
-                    cache: cache.clone(),
-                    statics: ShadowPass::new(ctx, scene, frame, cache, views, Casters::Static)?,
-                    copy: ShadowCopyPass::new(cache, maps, views),
-                    moving: ShadowPass::new(ctx, scene, frame, maps, views, Casters::Moving)?,
-                };
-                // The first frame draws every view from scratch.
-                c.set_views(&[], &[]);
-                Some(c)
-            }
+        let cached = if scene.draws.iter().any(|d| d.moving) {
+            let cache = Arc::new(Image::new(ctx, "shadow maps (static casters)", maps.desc)?);
+            let c = CachedCasters {
+                statics: ShadowPass::new(ctx, scene, frame, &cache, views, Casters::Static)?,
+                copy: ShadowCopyPass::new(&cache, maps, views),
+                moving: ShadowPass::new(ctx, scene, frame, maps, views, Casters::Moving)?,
+                cache,
+            };
+            // The first frame draws every view from scratch.
+            c.set_views(&[], &[]);
+            Some(c)
+        } else {
+            None
         };
         let all = ShadowPass::new(ctx, scene, frame, maps, views, Casters::All)?;
         let moving_rows = scene.draws.iter().map(|d| d.moving).collect();
