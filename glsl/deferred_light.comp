@@ -62,9 +62,13 @@ void main() {
         Light l = lights[i];
         LightSample s = sample_light(l, P);
         float cos_theta = dot(N, s.wi);
+        // The diffuse term's cosine is the footprint's mean normal's (gbuffer.frag: shorter
+        // than 1 where a normal map's normals disagree), the mean of its normals' cosines
+        // wherever none faces away (material.glsl); the specular lobe's is the mean's direction.
+        float cos_mean = dot(ns.xyz, s.wi);
         // Light from behind the geometric surface is blocked (the path tracer's rule), also
         // where a smoothed shading normal still faces it.
-        if (cos_theta <= 0.0 || dot(ng, s.wi) <= 0.0 || max(s.irradiance.r, max(s.irradiance.g, s.irradiance.b)) <= 0.0) {
+        if (max(cos_theta, cos_mean) <= 0.0 || dot(ng, s.wi) <= 0.0 || max(s.irradiance.r, max(s.irradiance.g, s.irradiance.b)) <= 0.0) {
             continue;
         }
         float vis = 1.0;
@@ -76,8 +80,8 @@ void main() {
             vis = shadow_visibility(shadow_map, views[layer], layer, P, ng, s.wi, s.distance,
                                     frame.shadow.x, frame.shadow.y, frame.shadow.z);
         }
-        vec3 f = brdf_diffuse(albedo) + brdf_specular(ks, ns.a, N, V, s.wi);
-        radiance += f * s.irradiance * cos_theta * vis;
+        vec3 f = brdf_diffuse(albedo) * max(cos_mean, 0.0) + brdf_specular(ks, ns.a, N, V, s.wi) * max(cos_theta, 0.0);
+        radiance += f * s.irradiance * vis;
     }
     vec3 indirect = vec3(0.0);
     float ao = 1.0;

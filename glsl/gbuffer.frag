@@ -20,7 +20,8 @@ layout(location = 3) flat in uint v_material;
 
 layout(location = 0) out vec4 out_albedo;    // R8G8B8A8_SRGB: linear written, sRGB stored;
                                              //   a: geometric normal, octahedral x
-layout(location = 1) out vec4 out_normal;    // RGBA16F: world normal, a shininess
+layout(location = 1) out vec4 out_normal;    // RGBA16F: world normal (a footprint's mean: up to
+                                             //   unit length), a shininess (Toksvig)
 layout(location = 2) out vec4 out_specular;  // R8G8B8A8_SRGB: Ks; a: geometric normal, oct. y
 layout(location = 3) out vec4 out_emission;  // RGBA16F: emitted radiance * radiance scale
 
@@ -28,13 +29,14 @@ bool has(int tex) {
     return tex >= 0 && uint(tex) < TEXTURE_COUNT;
 }
 
-// The shading normal bent by the material's normal or height map (material.glsl: level 0, the
-// same as the path tracer's), in the pixel's UV frame.
+// The shading normal bent by the material's normal or height map: the mean over the pixel's
+// footprint (material.glsl: `filtered_normal`, unnormalized), in the pixel's UV frame.
 vec3 bent_normal(Material m, vec3 n, vec3 ng, vec3 dpdx, vec3 dpdy, vec2 duvdx, vec2 duvdy) {
     int tex = m.texture.z;
     if (!has(tex) || m.texture.w == 0) return n;
     UvFrame f = uv_frame(dpdx, dpdy, duvdx, duvdy);
-    return keep_facing(mapped_normal(textures[tex], texture_sampler, m.texture.w, n, f, v_uv, m.emission.a), n, ng);
+    vec3 mean = filtered_normal(textures[tex], texture_sampler, m.texture.w, n, f, v_uv, duvdx, duvdy, m.emission.a);
+    return keep_facing(mean, n, ng);
 }
 
 void main() {
@@ -57,7 +59,8 @@ void main() {
     // itself is blocked whatever the shading normal says, as in the path tracer.
     vec2 facing = oct_encode(dot(ng, ng) > 0.0 ? ng : n);
     out_albedo = vec4(clamp(albedo, 0.0, 1.0), facing.x);
-    out_normal = vec4(n, clamp(m.specular.a, 0.0, HALF_MAX));
+    // The normal is the footprint's mean: deferred_light.comp's diffuse reads its length.
+    out_normal = vec4(n, clamp(toksvig_shininess(m.specular.a, length(n)), 0.0, HALF_MAX));
     out_specular = vec4(clamp(m.specular.rgb, 0.0, 1.0), facing.y);
     out_emission = vec4(min(max(m.emission.rgb, 0.0) * frame.radiance_scale.x, vec3(HALF_MAX)), 1.0);
 }

@@ -8,7 +8,7 @@
 // work list (the static list is built in grid order by voxel_resolve.comp). Textures and
 // normals are sampled over the part of the pixel's square that the triangle covers: at its
 // centroid, with the texture-coordinate gradient over its extent, so at the mip level of that
-// footprint. (Interpolated attributes would not do: a conservative fragment's centre can lie
+// footprint (a normal or height map gives the mean of its normals there). (Interpolated attributes would not do: a conservative fragment's centre can lie
 // past the triangle's edge, where they extrapolate, and a repeating texture wraps; geometry-
 // shader dilation would stretch them.) Every rasterizer, with or without hardware conservative
 // rasterization, so samples the same texels, and an alpha-masked surface voxelizes only where
@@ -197,6 +197,16 @@ void main() {
 
     vec3 face = safe_normalize(cross(g_t1 - g_t0, g_t2 - g_t0), vec3(0.0, 1.0, 0.0));
     vec3 nrm = safe_normalize(sp.normal, face);
+    int bump = m.texture.z;
+    if (bump >= 0 && uint(bump) < TEXTURE_COUNT && m.texture.w != 0) {
+        // The bent normals' mean over the voxel's footprint (material.glsl), as the G-buffer
+        // takes it over a pixel's; the voxel's normal is the mean of its samples.
+        float size = grid.origin.w;
+        UvFrame f = uv_frame((g_t1 - g_t0) * size, (g_t2 - g_t0) * size, g_uvs[1] - g_uvs[0], g_uvs[2] - g_uvs[0]);
+        vec3 mean = filtered_normal(textures[bump], texture_sampler, m.texture.w, nrm, f, sp.uv, sp.duv_dx,
+                                    sp.duv_dy, m.emission.a);
+        nrm = keep_facing(mean, nrm, nrm);
+    }
     vec3 emission = m.emission.rgb / grid.params.x;
 
     // A plane with slope <= 1 along u and v spans at most 3 voxels of the column.

@@ -349,6 +349,41 @@ pub struct Comparison {
     /// much energy the test image gains or loses overall.
     pub test_mean: f64,
     pub reference_mean: f64,
+    /// Salt-and-pepper noise: the fraction of lit pixels of each image ([`outlier_fraction`])
+    /// whose luminance differs from the median of its 3 x 3 neighbourhood by more than half
+    /// of it. An aliasing image (unfiltered bump maps, issue 42) has many more than its
+    /// converged reference; a noisy reference has some too, hence both.
+    #[serde(default)]
+    pub test_outliers: f64,
+    #[serde(default)]
+    pub reference_outliers: f64,
+}
+
+/// The fraction of lit pixels (3 x 3 median of luminance above 0) whose luminance differs
+/// from that median by more than half of it (edges clamped).
+pub fn outlier_fraction(img: &LinearImage) -> f64 {
+    let (w, h) = (img.width as i64, img.height as i64);
+    let y = |x: i64, yy: i64| {
+        let i = (yy.clamp(0, h - 1) * w + x.clamp(0, w - 1)) as usize * 3;
+        0.2126 * img.rgb[i] + 0.7152 * img.rgb[i + 1] + 0.0722 * img.rgb[i + 2]
+    };
+    let (mut lit, mut far) = (0u64, 0u64);
+    for py in 0..h {
+        for px in 0..w {
+            let mut around: [f32; 9] = std::array::from_fn(|k| y(px + k as i64 % 3 - 1, py + k as i64 / 3 - 1));
+            around.sort_by(f32::total_cmp);
+            let median = around[4];
+            if median > 0.0 {
+                lit += 1;
+                far += u64::from((y(px, py) - median).abs() > 0.5 * median);
+            }
+        }
+    }
+    if lit == 0 {
+        0.0
+    } else {
+        far as f64 / lit as f64
+    }
 }
 
 fn check_pair(
@@ -433,6 +468,8 @@ fn compare_checked(test: &LinearImage, reference: &LinearImage, exposure: f32, t
         pixels: test.pixels(),
         test_mean: sum_t / n,
         reference_mean: sum_r / n,
+        test_outliers: outlier_fraction(test),
+        reference_outliers: outlier_fraction(reference),
     }
 }
 
@@ -552,6 +589,19 @@ mod tests {
         assert!((auto_exposure(&scaled) - (auto_exposure(&img) - 3.0)).abs() < 1e-4);
         // Clamped to the range render.exposure accepts.
         assert_eq!(auto_exposure(&flat(1, 1, [1e-30; 3])), 64.0);
+    }
+
+    #[test]
+    fn isolated_pixels_count_as_outliers_and_edges_do_not() {
+        let mut speckled = flat(8, 8, [0.5; 3]);
+        for i in [9, 30, 52] {
+            speckled.rgb[i * 3..i * 3 + 3].copy_from_slice(&[0.0; 3]);
+        }
+        assert!(close(outlier_fraction(&speckled), 3.0 / 64.0, 1e-9));
+        // A step edge and a smooth ramp have none; black pixels are not lit.
+        let edge = img(8, 8, (0..64).flat_map(|i| [if i % 8 < 4 { 0.1 } else { 1.0 }; 3]).collect());
+        assert_eq!(outlier_fraction(&edge), 0.0);
+        assert_eq!(outlier_fraction(&flat(4, 4, [0.0; 3])), 0.0);
     }
 
     fn img(width: u32, height: u32, rgb: Vec<f32>) -> LinearImage {

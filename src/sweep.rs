@@ -1055,6 +1055,8 @@ mod tests {
             pixels: 1,
             test_mean: 1.0,
             reference_mean: 1.0,
+            test_outliers: 0.0,
+            reference_outliers: 0.0,
         };
         let r = Row::new("spec-rt".into(), &settings, [1.0; 3], 1.0, &c);
         assert_eq!((r.knob(Param::Specular), r.specular.as_str()), (2.0, "rt"));
@@ -1075,6 +1077,8 @@ mod tests {
             pixels: 1,
             test_mean: 1.0,
             reference_mean: 1.0,
+            test_outliers: 0.0,
+            reference_outliers: 0.0,
         };
         Row::new(label.into(), &crate::scene::GiSettings::default(), [ms, ms, ms], 1.0, &c)
     }

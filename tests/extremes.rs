@@ -239,7 +239,7 @@ fn emission_from_a_millionth_to_a_million_is_linear() {
             albedo_texture: None,
             mask_texture: None,
             normal_texture: None,
-            bump_scale: 1.0,
+            relief: Relief::default(),
             specular: Vec3::ZERO,
             shininess: 1.0,
             emission: Vec3::splat(le),

@@ -10,7 +10,7 @@ use dvsgi::metrics::LinearImage;
 use dvsgi::reference::{PathTracer, ReferenceOptions};
 use dvsgi::regions::{region_stats, Grouping, Pair, RegionMap, RegionStats};
 use dvsgi::render::{FrameOutput, Renderer};
-use dvsgi::scene::{Aabb, Camera, Material, Motion, Scene};
+use dvsgi::scene::{Aabb, Camera, Material, Motion, Relief, Scene};
 use glam::Vec3;
 
 /// The cached Cornell references: 64x64 at 4096 spp (full and direct light only), traced with
@@ -385,7 +385,7 @@ fn specular_light_comes_from_the_mirror_direction() {
         albedo_texture: None,
         mask_texture: None,
         normal_texture: None,
-        bump_scale: 1.0,
+        relief: Relief::default(),
         specular: Vec3::splat(0.8),
         shininess: 200.0,
         emission: Vec3::ZERO,

@@ -1,6 +1,7 @@
 //! Material maps on lavapipe with validation: alpha masks cut the G-buffer, the shadow maps,
 //! the voxels and the path tracer alike; normal and height maps bend G-buffer normals as an
-//! analytic height field says; supersampled textured direct light matches the reference.
+//! analytic height field says, and a minified map shows its footprint's average (what jittered
+//! paths converge to); supersampled textured direct light matches the reference.
 
 mod common;
 
@@ -339,7 +340,7 @@ fn bumped_square(map: Texture, scale: f32, sun_direction: Vec3) -> Scene {
     let square = uv_quad("square", [v(-1., -1., 0.), v(1., -1., 0.), v(1., 1., 0.), v(-1., 1., 0.)], uv, Vec3::Z, 0);
     let mut m = material("bumped", Vec3::splat(0.8));
     m.normal_texture = Some(0);
-    m.bump_scale = scale;
+    m.relief = Relief::Units(scale);
     let camera =
         Camera { position: v(0., 0., 3.), target: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 45.0, near: 0.1, far: 10.0 };
     scene(vec![square], vec![m], vec![map], camera, vec![sun(sun_direction, 1.0)])
@@ -413,12 +414,15 @@ fn fine_sun() -> Vec3 {
     Vec3::new(-0.4, -0.3, -1.0).normalize()
 }
 
-/// Direct radiance of the bumped square at each pixel centre against the analytic answer
-/// albedo / pi E max(0, n . l), for the rasterizer (`--gi none`) and the path tracer
-/// (`--bounces 0`, through pixel centres): each within its noise + 2% of the answer for the
-/// normals `normal(u, v)` at every pixel, with no pixel black that the answer lights, and its
-/// mean within 1% of the continuous field's; and the rasterizer's mean the same at 3 x 3
-/// supersampling (the bump's strength does not follow the sampling density).
+/// Direct radiance of the bumped square against the analytic answer albedo / pi E max(0, n . l):
+/// - the path tracer through pixel centres (the point rule: the map at level 0) within its
+///   noise + 2% of the answer for the normals `normal(u, v)` at every pixel, no pixel black
+///   that the answer lights, and its mean within 1% of the continuous field's;
+/// - the rasterizer at supersample 1, whose pixel shows its footprint's mean (filtered normals,
+///   glsl/include/material.glsl), against the path tracer jittered over each pixel (the
+///   footprint's average) within noise + 3% at every pixel, with its mean within 1% of the
+///   field's (the bump's strength does not follow the sampling density), no more isolated
+///   outliers than the jittered paths, and the same mean at 3 x 3 supersampling.
 fn assert_direct_light_is_analytic(s: Scene, normal: impl Fn(f32, f32) -> Vec3, what: &str) {
     let l = -fine_sun();
     let radiance = |n: Vec3| 0.8 / PI * n.dot(l).max(0.0);
@@ -431,16 +435,58 @@ fn assert_direct_light_is_analytic(s: Scene, normal: impl Fn(f32, f32) -> Vec3, 
         let i = ((y * w + x) * 3) as usize;
         (reference.mean[i], reference.variance[i].sqrt())
     };
-    let (raster, _) = render(&context(), s.clone());
-    let rasterized = |x: u32, y: u32| (raster.radiance[((y * w + x) * 4) as usize], 0.0);
-    let raster_mean = compare_with_analytic(&s, &want, &rasterized, field, &format!("{what}, rasterized"));
     compare_with_analytic(&s, &want, &traced, field, &format!("{what}, path traced"));
+    let (raster, _) = render(&context(), s.clone());
+    let raster_mean = mean_over_square(&s, |x, y| raster.radiance[((y * w + x) * 4) as usize]);
+    let rel = raster_mean / field - 1.0;
+    println!("{what}, rasterized: mean {raster_mean:.5} against the field's {field:.5} ({:+.2}%)", rel * 100.0);
+    assert!(rel.abs() < 0.01, "{what}: the rasterized mean differs from the field's by {:.2}%", rel * 100.0);
+    let jittered = trace(&s, 256, true);
+    assert_footprints_match(&s, &raster, &jittered, 0.03, what);
     let mut supersampled = s.clone();
     supersampled.settings.supersample = 3;
     let (ss, _) = render(&context(), supersampled);
     let ratio = mean_over_square(&s, |x, y| ss.radiance[((y * w + x) * 4) as usize]) / raster_mean;
     println!("{what}: rasterized mean at 3 x 3 supersampling / at 1: {ratio:.4}");
     assert!((ratio - 1.0).abs() < 0.01, "{what}: supersampling moves the mean by {ratio}");
+}
+
+/// The rasterized image as linear RGB.
+fn linear(out: &FrameOutput) -> dvsgi::metrics::LinearImage {
+    let rgb = out.radiance.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+    dvsgi::metrics::LinearImage { width: out.width, height: out.height, rgb }
+}
+
+/// The rasterizer (supersample 1) against the path tracer jittered over each pixel, on the
+/// pixels that show the square: every one within 4 sigma + `tolerance` of the paths' value, and
+/// no more isolated outliers (`metrics::outlier_fraction`) than the paths have, + 0.02.
+fn assert_footprints_match(s: &Scene, raster: &FrameOutput, jittered: &ReferenceImage, tolerance: f32, what: &str) {
+    let w = s.settings.width;
+    let (mut far, mut n, mut worst) = (0, 0, 0.0f32);
+    for y in 0..s.settings.height {
+        for x in 0..w {
+            if square_uv(s, x, y).is_none() {
+                continue;
+            }
+            let i = (y * w + x) as usize;
+            let (pt, sigma, ras) = (jittered.mean[i * 3], jittered.variance[i * 3].sqrt(), raster.radiance[i * 4]);
+            worst = worst.max((ras - pt).abs() / pt.max(1e-6));
+            n += 1;
+            if (ras - pt).abs() > 4.0 * sigma + tolerance * pt + 1e-5 {
+                far += 1;
+            }
+        }
+    }
+    let paths = dvsgi::metrics::LinearImage { width: w, height: s.settings.height, rgb: jittered.mean.clone() };
+    let (outliers, paths_outliers) =
+        (dvsgi::metrics::outlier_fraction(&linear(raster)), dvsgi::metrics::outlier_fraction(&paths));
+    println!(
+        "{what}: rasterized footprints against jittered paths: worst pixel {:.2}%, {far} of {n} beyond noise + {:.0}%; outliers {outliers:.4} against {paths_outliers:.4}",
+        worst * 100.0,
+        tolerance * 100.0
+    );
+    assert_eq!(far, 0, "{what}: {far} of {n} pixels differ from the jittered paths beyond noise + {tolerance}");
+    assert!(outliers <= paths_outliers + 0.02, "{what}: outliers {outliers} against the paths' {paths_outliers}");
 }
 
 /// Mean of `value` over the pixels that show the square.
@@ -494,31 +540,33 @@ fn compare_with_analytic(
 }
 
 /// The normal that the height map as stored defines at (u, v), by the rule of
-/// glsl/include/material.glsl (scenes/FORMAT.md): the 8-bit heights reconstructed bilinearly
-/// at level 0 (repeat), differenced one texel apart, the surface displaced `scale` scene units
-/// per unit height. Against the continuous field this carries the map's quantization: one
-/// code (1/255) across two texels of a 512-texel map tilts the normal by up to 0.6 degrees
-/// here, up to 2.5% of the radiance where the light is grazing, so the per-pixel answer is the
-/// stored map's and the continuous field bounds the mean.
+/// glsl/include/material.glsl and scene::maps (scenes/FORMAT.md): each texel's normal from
+/// its 8-bit neighbours' heights one texel apart (central differences, repeat), for the
+/// square's relief of `scale` scene units per unit height (`scale / 2` of a tile: the square
+/// spans 2 units per unit of UV), interpolated bilinearly at level 0 and normalized. Against
+/// the continuous field this carries the map's quantization: one code (1/255) across two
+/// texels of a 512-texel map tilts the normal by up to 0.6 degrees here, up to 2.5% of the
+/// radiance where the light is grazing, so the per-pixel answer is the stored map's and the
+/// continuous field bounds the mean.
 fn stored_height_normal(map: &Texture, u: f32, v: f32, scale: f32) -> Vec3 {
-    let size = map.width as f32;
-    let h = |u: f32, v: f32| {
-        let (x, y) = (u.rem_euclid(1.0) * size - 0.5, v.rem_euclid(1.0) * size - 0.5);
-        let (x0, y0) = (x.floor(), y.floor());
-        let at = |i: f32, j: f32| {
-            let (i, j) = ((i.rem_euclid(size)) as u32, (j.rem_euclid(size)) as u32);
-            map.rgba8[((j * map.width + i) * 4 + 3) as usize] as f32 / 255.0
-        };
-        let (fx, fy) = (x - x0, y - y0);
-        let below = at(x0, y0) * (1.0 - fx) + at(x0 + 1.0, y0) * fx;
-        let above = at(x0, y0 + 1.0) * (1.0 - fx) + at(x0 + 1.0, y0 + 1.0) * fx;
-        below * (1.0 - fy) + above * fy
+    let size = map.width as i64;
+    let relief = scale / 2.0;
+    let h = |i: i64, j: i64| {
+        map.rgba8[((j.rem_euclid(size) * size + i.rem_euclid(size)) * 4 + 3) as usize] as f32 / 255.0
     };
-    let d = 1.0 / size;
-    let hu = (h(u + d, v) - h(u - d, v)) / (2.0 * d);
-    let hv = (h(u, v + d) - h(u, v - d)) / (2.0 * d);
-    // The square maps u to x (dP/du = 2 x) and top-down v to -y (dP/dv = -2 y).
-    Vec3::new(-scale * hu / 2.0, scale * hv / 2.0, 1.0).normalize()
+    let texel_normal = |i: i64, j: i64| {
+        let dhdu = (h(i + 1, j) - h(i - 1, j)) * size as f32 / 2.0;
+        let dhdv = (h(i, j + 1) - h(i, j - 1)) * size as f32 / 2.0;
+        // The square maps u to x and top-down v to -y: +y of the tangent frame is +y.
+        Vec3::new(-relief * dhdu, relief * dhdv, 1.0).normalize()
+    };
+    let (x, y) = (u.rem_euclid(1.0) * size as f32 - 0.5, v.rem_euclid(1.0) * size as f32 - 0.5);
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let (i, j) = (x0 as i64, y0 as i64);
+    let below = texel_normal(i, j) * (1.0 - fx) + texel_normal(i + 1, j) * fx;
+    let above = texel_normal(i, j + 1) * (1.0 - fx) + texel_normal(i + 1, j + 1) * fx;
+    (below * (1.0 - fy) + above * fy).normalize()
 }
 
 #[test]
@@ -533,6 +581,93 @@ fn height_mapped_direct_light_matches_the_analytic_field_in_both_renderers() {
 fn normal_mapped_direct_light_matches_the_analytic_field_in_both_renderers() {
     let s = bumped_square(FINE.normal_map(FINE_SIZE, FINE_SCALE), 1.0, fine_sun());
     assert_direct_light_is_analytic(s, |u, v| FINE.normal(u, v, FINE_SCALE), "normal map");
+}
+
+/// A typical stone height map, made here: rounded stones (a periodic Voronoi pattern, 6 x 6
+/// cells a tile) parted by mortar grooves, with a fine grain, as an 8-bit greyscale image.
+fn stone_map(size: u32) -> Texture {
+    let cells = 6u32;
+    let hash = |a: u32, b: u32| {
+        let mut x = a.wrapping_mul(0x9e37_79b9) ^ b.wrapping_mul(0x85eb_ca6b) ^ 0x2545_f491;
+        x ^= x >> 15;
+        x = x.wrapping_mul(0x2c1b_3c6d);
+        x ^= x >> 12;
+        (x & 0xffff) as f32 / 65535.0
+    };
+    let centre = |cx: i32, cy: i32| {
+        let (wx, wy) = (cx.rem_euclid(cells as i32) as u32, cy.rem_euclid(cells as i32) as u32);
+        Vec2::new(cx as f32 + 0.2 + 0.6 * hash(wx, wy), cy as f32 + 0.2 + 0.6 * hash(wy + 17, wx + 5))
+    };
+    texture("stone", size, TextureUse::Height, |x, y| {
+        let p = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) * cells as f32 / size as f32;
+        let (cx, cy) = (p.x.floor() as i32, p.y.floor() as i32);
+        let (mut f1, mut f2) = (f32::MAX, f32::MAX);
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                let d = p.distance(centre(cx + dx, cy + dy));
+                if d < f1 {
+                    (f1, f2) = (d, f1);
+                } else if d < f2 {
+                    f2 = d;
+                }
+            }
+        }
+        let mortar = ((f2 - f1) / 0.12).clamp(0.0, 1.0);
+        let dome = (1.0 - f1 * 0.9).clamp(0.0, 1.0);
+        let h = mortar * (0.55 + 0.35 * dome) + 0.06 * hash(x, y);
+        [(h.clamp(0.0, 1.0) * 255.0).round() as u8; 4]
+    })
+}
+
+/// A stone wall (issue 42), the map tiled twice over the square (about 10 texels a pixel: a
+/// distant wall) with the default relief, as a scene whose MTL gives no `-bm`: at supersample
+/// 1 every pixel is within noise + 3% of the path tracer jittered over it (no salt-and-pepper
+/// noise), its FLIP against it at most 0.06 and its mean within 2%; supersampling 4 x 4 moves
+/// the mean by at most 1% (FLIP at most 0.05); and the relief keeps the mean light within 5% of
+/// the flat square's.
+#[test]
+fn a_minified_stone_wall_shows_the_average_of_its_bumps_with_a_relief_that_keeps_its_light() {
+    let uv = [Vec2::new(0.0, 2.0), Vec2::new(2.0, 2.0), Vec2::new(2.0, 0.0), Vec2::new(0.0, 0.0)];
+    let v = Vec3::new;
+    let square = uv_quad("wall", [v(-1., -1., 0.), v(1., -1., 0.), v(1., 1., 0.), v(-1., 1., 0.)], uv, Vec3::Z, 0);
+    let mut m = material("stone", Vec3::splat(0.8));
+    m.normal_texture = Some(0);
+    let camera =
+        Camera { position: v(0., 0., 3.), target: Vec3::ZERO, up: Vec3::Y, fov_y_deg: 45.0, near: 0.1, far: 10.0 };
+    let s = scene(vec![square], vec![m], vec![stone_map(256)], camera, vec![sun(fine_sun(), 1.0)]);
+    assert_eq!(s.materials[0].relief, Relief::default());
+    let (raster, _) = render(&context(), s.clone());
+    let jittered = trace(&s, 256, true);
+    assert_footprints_match(&s, &raster, &jittered, 0.03, "stone wall");
+    let paths = dvsgi::metrics::LinearImage { width: s.settings.width, height: s.settings.height, rgb: jittered.mean.clone() };
+    let against_paths = dvsgi::metrics::compare(&linear(&raster), &paths, 0.0, ToneMap::Aces).unwrap();
+    let mut supersampled = s.clone();
+    supersampled.settings.supersample = 4;
+    let (ss, _) = render(&context(), supersampled);
+    let against_ss = dvsgi::metrics::compare(&linear(&raster), &linear(&ss), 0.0, ToneMap::Aces).unwrap();
+    let mut flat = s.clone();
+    flat.materials[0].normal_texture = None;
+    let flat_paths = trace(&flat, 64, true);
+    let w = s.settings.width;
+    let over_square = |img: &[f32], stride: u32| mean_over_square(&s, |x, y| img[((y * w + x) * stride) as usize]);
+    let (r, p, q, f) = (
+        over_square(&raster.radiance, 4),
+        over_square(&jittered.mean, 3),
+        over_square(&ss.radiance, 4),
+        over_square(&flat_paths.mean, 3),
+    );
+    println!(
+        "stone wall: FLIP {:.4} against the jittered paths, mean {:.4} of theirs; supersample 4 / 1: mean {:.4}, FLIP {:.4}; relief / flat (paths): {:.4}",
+        against_paths.flip.mean,
+        r / p,
+        q / r,
+        against_ss.flip.mean,
+        p / f
+    );
+    assert!(against_paths.flip.mean <= 0.06, "FLIP {}", against_paths.flip.mean);
+    assert!((r / p - 1.0).abs() <= 0.02, "mean {} of the paths'", r / p);
+    assert!((q / r - 1.0).abs() <= 0.01 && against_ss.flip.mean <= 0.05, "supersampling: {} {}", q / r, against_ss.flip.mean);
+    assert!((p / f - 1.0).abs() <= 0.05, "the default relief changes the light by {}", p / f);
 }
 
 /// A square whose shading normals lean towards a sun that shines on its back: the light comes
@@ -576,7 +711,7 @@ fn supersampled_textured_direct_light_matches_the_reference() {
     }));
     s.materials[0].albedo_texture = Some(1);
     s.materials[0].normal_texture = Some(2);
-    s.materials[0].bump_scale = 0.05;
+    s.materials[0].relief = Relief::Units(0.05);
     // The floor fills the view. Its silhouette, one image row, weighs 3 x 3 ordered samples
     // against the reference's box integral over partly covered pixels: -0.45% of the image's
     // mean on its own, by chance offset by the texture on Mesa 22 and not on Mesa 25 (a flat

@@ -99,7 +99,7 @@ fn textured_square(texture: Texture) -> Scene {
             albedo_texture: Some(0),
             mask_texture: None,
             normal_texture: None,
-            bump_scale: 1.0,
+            relief: Relief::default(),
             specular: Vec3::ZERO,
             shininess: 1.0,
             emission: Vec3::ZERO,

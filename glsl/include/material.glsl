@@ -12,7 +12,7 @@
 
 // Mirrors scene::MASK_CUTOFF: a masked surface exists where the coverage is at least this.
 const float MASK_CUTOFF = 0.5;
-// Mirror render::scene_gpu::{NORMAL_MAP, HEIGHT_MAP}.
+// Mirror render::scene_gpu::{NORMAL_MAP, HEIGHT_MAP} (and HEIGHT_MAP_UNITS below).
 const int NORMAL_MAP = 1;
 const int HEIGHT_MAP = 2;
 
@@ -35,38 +35,58 @@ UvFrame uv_frame(vec3 dp1, vec3 dp2, vec2 duv1, vec2 duv2) {
     return f;
 }
 
-// A tangent-space normal-map texel (OpenGL convention: +x along +u, +y along the OBJ's +v,
-// which is -v of dvsgi's top-down UVs) applied to the shading normal n.
-vec3 normal_from_map(vec3 n, UvFrame f, vec3 texel) {
-    vec3 tn = texel * 2.0 - 1.0;
+// Tangent-space normals as the GPU stores them (scene::maps::encode_unit): (x + 1) / 2,
+// (y + 1) / 2, 1 - z. Height maps are uploaded as the normal maps of their default relief.
+// A filtered texel is the mean of the unit normals it covers, shorter than 1 where they
+// disagree; a stored unit normal (z >= 0.5) decodes within STORED_NORMAL_ERROR of length 1.
+const float STORED_NORMAL_ERROR = 0.013;  // mirrors scene::maps::STORED_NORMAL_ERROR
+const int HEIGHT_MAP_UNITS = 3;           // mirrors render::scene_gpu::HEIGHT_MAP_UNITS
+
+vec3 decode_tangent(vec4 texel) {
+    return vec3(texel.xy * 2.0 - 1.0, 1.0 - texel.z);
+}
+
+// A height map's tangent vector with its slopes scaled by the material's `factor`
+// (GpuMaterial::emission.a, render::relief): a map is uploaded as the normal map of its
+// material's relief, so for a relief in texture space (HEIGHT_MAP) the factor is 1 and this
+// returns tn; for one in scene units (HEIGHT_MAP_UNITS) the slopes scale by the material's
+// mean scene units per unit of UV (the factor) over the surface's own. The length (the
+// normals' agreement) is kept: exact for a unit vector (a point, level 0), an approximation
+// of the scaled normals' mean where the ratio is not 1. A normal map's tn is as it is.
+vec3 scale_relief(vec3 tn, int kind, UvFrame f, float factor) {
+    float k = 1.0;
+    if (kind == HEIGHT_MAP) k = factor;
+    if (kind == HEIGHT_MAP_UNITS) k = f.ok ? factor / sqrt(max(length(cross(f.du, f.dv)), 1e-30)) : 1.0;
+    if (k == 1.0) return tn;
+    vec3 p = vec3(tn.xy * k, tn.z);
+    float l = length(p);
+    return l > 1e-30 ? p * (length(tn) / l) : tn;
+}
+
+// Tangent-space vector tn (OpenGL convention: +x along +u, +y along the OBJ's +v, which is -v
+// of dvsgi's top-down UVs) in the frame of the shading normal n: unnormalized, as long as tn.
+// On a surface with conformal UVs this is the bump-mapped normal of the height field exactly
+// (scene::maps::normals_from_heights); mirrored UVs flip the bitangent.
+vec3 tangent_to_world(vec3 n, UvFrame f, vec3 tn) {
     vec3 t = f.du - n * dot(n, f.du);
-    if (!f.ok || dot(t, t) < 1e-30) return n;
+    if (!f.ok || dot(t, t) < 1e-30) return n * length(tn);
     t = normalize(t);
     vec3 b = cross(n, t);
     if (dot(b, -f.dv) < 0.0) b = -b;  // mirrored UVs
-    vec3 p = tn.x * t + tn.y * b + tn.z * n;
-    return dot(p, p) > 1e-30 ? normalize(p) : n;
+    return tn.x * t + tn.y * b + tn.z * n;
 }
 
-// A height map's gradient dh = (dh/du, dh/dv) (per unit of UV) applied to the shading normal n:
-// the surface displaced by scale * h along n (pbrt's bump mapping), with n standing in for
-// the geometric normal: n' ~ n |du x dv| + sign (scale dh.v (du x n) + scale dh.u (n x dv)).
-vec3 normal_from_height(vec3 n, UvFrame f, vec2 dh, float scale) {
-    vec3 c = cross(f.du, f.dv);
-    float area = length(c);
-    if (!f.ok || area < 1e-30) return n;
-    float s = dot(c, n) < 0.0 ? -1.0 : 1.0;
-    vec3 p = n * area + s * scale * (dh.y * cross(f.du, n) + dh.x * cross(n, f.dv));
-    return dot(p, p) > 1e-30 ? normalize(p) : n;
-}
-
-// The maps that bend normals are read at level 0, bilinear, by every renderer alike, with the
-// filter written out (texel fetches: the same arithmetic in the fragment and compute stages,
-// whatever the sampler's anisotropy or the device's filtering precision). The bump is a
-// property of the surface point, as the map defines it at full resolution, not of the pixel or
-// the sample that looks at it: a height map differenced at the level a footprint selects has its
-// bumps flattened as pixels grow, so its strength followed the sampling density. Antialiasing
-// comes from averaging point values: supersampling in the rasterizer, jitter in the path tracer.
+// The maps that bend normals are read two ways, by one convention:
+// - at a point (the path tracer, the truth): level 0, bilinear, the filter written out (texel
+//   fetches: the same arithmetic in every stage, whatever the sampler's anisotropy), the
+//   normal normalized: `mapped_normal`;
+// - over a footprint (the G-buffer at a pixel, the voxelizer at a voxel): the mip chain's
+//   mean normal, filtered by the sampler at the footprint's gradients, not normalized:
+//   `filtered_normal`. For Lambertian light, max(0, mean . l) is the footprint's mean of
+//   max(0, n . l) wherever no normal under it faces away from the light, so a minified bumpy
+//   wall shows the average a supersampled or path-traced pixel converges to, not one
+//   micro-normal out of many (salt-and-pepper noise, issue 42). The specular lobe widens by
+//   the mean's shortness (Toksvig, `toksvig_shininess`).
 
 // Texel i of level 0, wrapped (REPEAT) for i in -size..2 size - 1.
 vec4 fetch_repeat(texture2D t, sampler s, ivec2 size, ivec2 i) {
@@ -86,20 +106,44 @@ vec4 bilinear_level0(texture2D t, sampler s, vec2 uv) {
     return mix(below, above, f.y);
 }
 
-// A height map's gradient (dh/du, dh/dv) per unit of UV at uv: central differences one texel
-// apart on level 0 (heights in alpha: render::scene_gpu::upload_texture).
-vec2 height_gradient(texture2D t, sampler s, vec2 uv) {
-    vec2 d = 1.0 / vec2(textureSize(sampler2D(t, s), 0));
-    float hu = bilinear_level0(t, s, uv + vec2(d.x, 0.0)).a - bilinear_level0(t, s, uv - vec2(d.x, 0.0)).a;
-    float hv = bilinear_level0(t, s, uv + vec2(0.0, d.y)).a - bilinear_level0(t, s, uv - vec2(0.0, d.y)).a;
-    return vec2(hu, hv) / (2.0 * d);
+// The shading normal n bent by map t (sampler s) of kind `kind` at the point uv, in the
+// surface's UV frame f; `factor` is the material's relief factor. Unit length.
+vec3 mapped_normal(texture2D t, sampler s, int kind, vec3 n, UvFrame f, vec2 uv, float factor) {
+    vec3 p = tangent_to_world(n, f, scale_relief(decode_tangent(bilinear_level0(t, s, uv)), kind, f, factor));
+    return dot(p, p) > 1e-30 ? normalize(p) : n;
 }
 
-// The shading normal n bent by map t (sampler s) of kind `kind` (NORMAL_MAP or HEIGHT_MAP) at uv, in the
-// surface's UV frame f; `scale` is a height map's displacement in scene units per unit height.
-vec3 mapped_normal(texture2D t, sampler s, int kind, vec3 n, UvFrame f, vec2 uv, float scale) {
-    if (kind == NORMAL_MAP) return normal_from_map(n, f, bilinear_level0(t, s, uv).rgb);
-    return normal_from_height(n, f, height_gradient(t, s, uv), scale);
+// The mean of t over the footprint spanned by the gradients dx, dy around uv: 4 x 4 taps at
+// the centres of its sixteenths, each filtered over one. One trilinear tap over the whole
+// footprint blurs over about two footprints (the mip texel's box and the bilinear tent): 7-9%
+// off a jittered pixel's average on a bump field of 6 pixels a period, 2 x 2 taps still 5.7%
+// on the stone wall of tests/maps.rs, 4 x 4 under 4% (the footprint's box blurred by a tent of
+// a quarter of it). Only bump-mapped surfaces pay the 16 fetches.
+vec4 footprint_mean(texture2D t, sampler s, vec2 uv, vec2 dx, vec2 dy) {
+    vec2 hx = 0.25 * dx, hy = 0.25 * dy;
+    vec4 sum = vec4(0.0);
+    for (int i = 0; i < 16; ++i) {
+        vec2 o = (float(i & 3) - 1.5) * hx + (float(i >> 2) - 1.5) * hy;
+        sum += textureGrad(sampler2D(t, s), uv + o, hx, hy);
+    }
+    return sum / 16.0;
+}
+
+// The mean of the bent normals over the footprint of gradients (duvdx, duvdy) at uv: not
+// normalized (length 1 where they agree, shorter where they do not).
+vec3 filtered_normal(texture2D t, sampler s, int kind, vec3 n, UvFrame f, vec2 uv, vec2 duvdx, vec2 duvdy,
+                     float factor) {
+    vec4 texel = footprint_mean(t, s, uv, duvdx, duvdy);
+    return tangent_to_world(n, f, scale_relief(decode_tangent(texel), kind, f, factor));
+}
+
+// Blinn-Phong exponent s over a footprint whose mean normal has length `len` (Toksvig 2005:
+// s len / (len + s (1 - len))): the lobe widens by the spread of the normals under it. A
+// shortness within STORED_NORMAL_ERROR is the storage's, not a spread.
+float toksvig_shininess(float s, float len) {
+    if (s <= 0.0) return s;
+    float l = clamp(len / (1.0 - STORED_NORMAL_ERROR), 0.0, 1.0);
+    return s * l / (l + s * (1.0 - l));
 }
 
 // A perturbed normal that turned away from the side the surface is seen from (ng) falls back

@@ -470,6 +470,11 @@ fn print_comparison(test: &std::path::Path, reference: &std::path::Path, c: &dvs
     );
     row("FLIP", &c.flip);
     row("SSIM", &c.ssim);
+    outln!(
+        "  outliers {:.4} against {:.4} (lit pixels > 50% off their 3x3 median: salt-and-pepper noise)",
+        c.test_outliers,
+        c.reference_outliers
+    );
     outln!("  (FLIP: 0 = identical, lower is better; SSIM: 1 = identical, higher is better)");
 }
 

@@ -11,6 +11,7 @@ pub mod lpv;
 pub mod passes;
 pub mod raster_profile;
 pub mod rays;
+pub mod relief;
 pub mod reuse;
 pub mod scene_gpu;
 pub mod schedule;

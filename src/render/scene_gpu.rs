@@ -5,7 +5,8 @@
 use crate::gpu::sync::{barrier, Access};
 use crate::gpu::{Bind, Buffer, Context, GpuResult, Image, ImageDesc, Sampler};
 use crate::render::graph::Use;
-use crate::scene::{Material, Scene, TextureUse};
+use crate::render::relief::ReliefPlan;
+use crate::scene::{Material, Relief, Scene, Texture, TextureUse};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec4};
@@ -28,10 +29,11 @@ pub struct GpuMaterial {
     pub albedo: [f32; 4],
     /// rgb Ks, a shininess exponent
     pub specular: [f32; 4],
-    /// rgb emitted radiance, a height map's bump scale (scene units per unit height)
+    /// rgb emitted radiance; a for a `HEIGHT_MAP_UNITS` map the material's scene units per
+    /// unit of UV (render::relief), otherwise 1
     pub emission: [f32; 4],
     /// texture indices or -1: x albedo, y alpha mask, z normal or height map; w what z is
-    /// (`NORMAL_MAP` or `HEIGHT_MAP`, 0 without)
+    /// (`NORMAL_MAP`, `HEIGHT_MAP` or `HEIGHT_MAP_UNITS`, 0 without)
     pub texture: [i32; 4],
 }
 
@@ -91,14 +93,16 @@ pub struct MaterialTable {
 
 impl MaterialTable {
     pub fn new(ctx: &Arc<Context>, scene: &Scene) -> GpuResult<MaterialTable> {
+        let plan = ReliefPlan::of(scene);
         let materials: Vec<GpuMaterial> = scene
             .materials
             .iter()
-            .map(|m| GpuMaterial {
+            .zip(&plan.normal_maps)
+            .map(|(m, &normal_map)| GpuMaterial {
                 albedo: Vec4::from((m.albedo, 1.0)).to_array(),
                 specular: Vec4::from((m.specular, m.shininess)).to_array(),
-                emission: Vec4::from((m.emission, m.bump_scale)).to_array(),
-                texture: texture_slots(scene, m),
+                emission: Vec4::from((m.emission, normal_map.map_or(1.0, |(_, factor)| factor))).to_array(),
+                texture: texture_slots(scene, m, normal_map),
             })
             .collect();
         let buffer = upload_buffer(
@@ -108,12 +112,24 @@ impl MaterialTable {
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
         let mut textures = Vec::new();
-        for (i, t) in scene.textures.iter().enumerate() {
-            let name = format!("texture {i} ({})", t.path.display());
-            textures.push(upload_texture(ctx, &name, t.usage, t.width, t.height, &t.rgba8)?);
+        for (i, up) in plan.uploads.iter().enumerate() {
+            let t = &scene.textures[up.texture as usize];
+            let name = if i < scene.textures.len() {
+                format!("texture {i} ({})", t.path.display())
+            } else {
+                format!("texture {i} ({}, relief {})", t.path.display(), up.relief)
+            };
+            textures.push(upload_texture(ctx, &name, t, up.relief)?);
         }
         let placeholder_texture = if textures.is_empty() {
-            Some(upload_texture(ctx, "placeholder texture", TextureUse::Color, 1, 1, &[255, 255, 255, 255])?)
+            let white = Texture {
+                path: "placeholder".into(),
+                width: 1,
+                height: 1,
+                rgba8: vec![255; 4],
+                usage: TextureUse::Color,
+            };
+            Some(upload_texture(ctx, "placeholder texture", &white, 0.0)?)
         } else {
             None
         };
@@ -172,17 +188,25 @@ impl MaterialTable {
 
 /// `GpuMaterial::texture.w` for a tangent-space normal map (glsl/include/material.glsl).
 pub const NORMAL_MAP: i32 = 1;
-/// `GpuMaterial::texture.w` for a height map.
+/// `GpuMaterial::texture.w` for a height map whose relief is in texture space
+/// (`Relief::Tile`): uploaded as the normal map of that relief (render::relief).
 pub const HEIGHT_MAP: i32 = 2;
+/// `GpuMaterial::texture.w` for a height map whose relief is in scene units (`Relief::Units`):
+/// uploaded for the material's mean scene units per unit of UV, `emission.a`, which the
+/// shader divides by the surface's own.
+pub const HEIGHT_MAP_UNITS: i32 = 3;
 
-fn texture_slots(scene: &Scene, m: &Material) -> [i32; 4] {
+/// Texture slots of a material: albedo, mask, the normal or height map's upload (`normal_map`,
+/// render::relief), and what that map is.
+fn texture_slots(scene: &Scene, m: &Material, normal_map: Option<(u32, f32)>) -> [i32; 4] {
     let index = |t: Option<u32>| t.map(|t| t as i32).unwrap_or(-1);
-    let kind = match m.normal_texture.map(|t| scene.textures[t as usize].usage) {
-        Some(TextureUse::Normal) => NORMAL_MAP,
-        Some(TextureUse::Height) => HEIGHT_MAP,
+    let kind = match (m.normal_texture.map(|t| scene.textures[t as usize].usage), m.relief) {
+        (Some(TextureUse::Normal), _) => NORMAL_MAP,
+        (Some(TextureUse::Height), Relief::Tile(_)) => HEIGHT_MAP,
+        (Some(TextureUse::Height), Relief::Units(_)) => HEIGHT_MAP_UNITS,
         _ => 0,
     };
-    [index(m.albedo_texture), index(m.mask_texture), index(m.normal_texture), kind]
+    [index(m.albedo_texture), index(m.mask_texture), index(normal_map.map(|(slot, _)| slot)), kind]
 }
 
 /// The anisotropy texture sampling uses: up to 16, as far as the device allows (1 = off,
@@ -247,21 +271,17 @@ fn fit_to_device(ctx: &Context, name: &str, levels: &mut Vec<super::texture::Mip
 
 /// Upload an RGBA8 texture with its full mip chain (`render::texture`: colour filtered in linear
 /// light, data maps as they are), left in SHADER_READ_ONLY_OPTIMAL for sampling anywhere.
-pub fn upload_texture(
-    ctx: &Arc<Context>,
-    name: &str,
-    usage: TextureUse,
-    width: u32,
-    height: u32,
-    rgba8: &[u8],
-) -> GpuResult<Image> {
-    let mut levels = super::texture::mip_chain_for(usage, width, height, rgba8);
+/// A height map becomes the normal map of `relief` tiles per unit height (render::relief).
+pub fn upload_texture(ctx: &Arc<Context>, name: &str, texture: &Texture, relief: f32) -> GpuResult<Image> {
+    let usage = texture.usage;
+    let mut levels = super::texture::mip_chain_for(usage, texture.width, texture.height, &texture.rgba8, relief);
     let (width, height) = fit_to_device(ctx, name, &mut levels);
     // One format for every texture: lavapipe (Mesa 22.3, LLVM 15) crashes compiling the path
     // tracer when textures of two formats are bound to it. Data in red, green and blue is
     // stored sRGB-encoded, so the sampler's decode returns the data value (steps of at most
-    // 0.9% of full scale, at the top of the range). Masks and heights are read from alpha,
-    // which no sampler decodes, so they filter linearly at full 8-bit precision.
+    // 0.9% of full scale, at the top of the range: normal maps store 1 - z, scene::maps). Masks
+    // are read from alpha, which no sampler decodes, so they filter linearly at full 8-bit
+    // precision. Height maps arrive here as heights and are uploaded as normal maps.
     if usage != TextureUse::Color {
         srgb_encode_data(&mut levels);
     }

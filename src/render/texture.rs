@@ -4,10 +4,12 @@
 //! values instead would darken every minified contrast (a black/white checker would go to sRGB
 //! 128, linear 0.22, not 0.5), and filtering each level from the quantized one above lets the
 //! rounding bias grow level by level (+0.08% per level on Crytek's floor, measured).
-//! Data maps (masks, normal and height maps) are linear and averaged as they are; alpha-test
-//! masks then keep their coverage (see [`preserve_coverage`]).
+//! Data maps are linear and averaged as they are; alpha-test masks then keep their coverage
+//! (see [`preserve_coverage`]). Normal maps are unit vectors at level 0 and height maps become
+//! normal maps (`scene::maps`), so each level holds the mean normal of the texels it covers,
+//! shorter than 1 where they disagree: what the shaders filter at a footprint (issue 42).
 
-use crate::scene::{TextureUse, MASK_CUTOFF};
+use crate::scene::{maps, TextureUse, MASK_CUTOFF};
 
 /// One level of a chain: RGBA8, sRGB-encoded colour, linear alpha.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -26,22 +28,28 @@ pub fn level_count(width: u32, height: u32) -> u32 {
 /// axis; each of its texels averages the texels of level n it covers: 2 x 2, or 3 along an odd
 /// axis at the last texel, so no texel of the level above is left out.
 pub fn mip_chain(width: u32, height: u32, rgba8: &[u8]) -> Vec<MipLevel> {
-    mip_chain_for(TextureUse::Color, width, height, rgba8)
+    mip_chain_for(TextureUse::Color, width, height, rgba8, 0.0)
 }
 
-/// The full chain of a texture of the given use: colour in linear light, data as it is.
-pub fn mip_chain_for(usage: TextureUse, width: u32, height: u32, rgba8: &[u8]) -> Vec<MipLevel> {
+/// The full chain of a texture of the given use: colour in linear light, data as it is; a
+/// height map as the normal map of `relief` tiles per unit of height (render::relief).
+pub fn mip_chain_for(usage: TextureUse, width: u32, height: u32, rgba8: &[u8], relief: f32) -> Vec<MipLevel> {
     let srgb = usage == TextureUse::Color;
     let table: [f32; 256] = if srgb { decode_table() } else { std::array::from_fn(|i| i as f32 / 255.0) };
-    let mut exact = Linear {
-        width,
-        height,
-        texels: rgba8
+    let texels = match usage {
+        TextureUse::Normal => maps::unit_normals(rgba8),
+        TextureUse::Height => maps::normals_from_heights(width, height, rgba8, relief),
+        TextureUse::Color | TextureUse::Mask => rgba8
             .chunks_exact(4)
             .map(|p| [table[p[0] as usize], table[p[1] as usize], table[p[2] as usize], f32::from(p[3]) / 255.0])
             .collect(),
     };
-    let mut levels = vec![MipLevel { width, height, rgba8: rgba8.to_vec() }];
+    let mut exact = Linear { width, height, texels };
+    let first = match usage {
+        TextureUse::Normal | TextureUse::Height => exact.quantize(false),
+        TextureUse::Color | TextureUse::Mask => MipLevel { width, height, rgba8: rgba8.to_vec() },
+    };
+    let mut levels = vec![first];
     while exact.width > 1 || exact.height > 1 {
         exact = downsample(&exact);
         let mut next = exact.quantize(srgb);
@@ -237,10 +245,38 @@ mod tests {
     }
 
     #[test]
+    fn stored_unit_normals_keep_their_length() {
+        // Directions tilted up to 60 degrees, through the GPU's storage of data textures: the
+        // nearest 8-bit code, sRGB-encoded, decoded by the sampler (scene_gpu::upload_texture).
+        let stored = |v: f32| decode_srgb(encode_srgb((v * 255.0).round() / 255.0));
+        let (mut short, mut long) = (0.0f32, 0.0f32);
+        for i in 0..=400 {
+            for j in 0..=400 {
+                let (x, y) = (i as f32 / 200.0 - 1.0, j as f32 / 200.0 - 1.0);
+                let z2 = 1.0 - x * x - y * y;
+                if z2 < 0.25 {
+                    continue;
+                }
+                let t = maps::encode_unit([x, y, z2.sqrt()]);
+                let d = [stored(t[0]) * 2.0 - 1.0, stored(t[1]) * 2.0 - 1.0, 1.0 - stored(t[2])];
+                let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                short = short.max(1.0 - len);
+                long = long.max(len - 1.0);
+            }
+        }
+        println!("stored unit normals: up to {short} short, {long} long");
+        assert!(short <= maps::STORED_NORMAL_ERROR, "{short}");
+    }
+
+    #[test]
     fn data_maps_average_as_they_are() {
-        // Black and white height texels average to 128 (not sRGB 188).
-        let chain = mip_chain_for(TextureUse::Height, 2, 1, &[0, 0, 0, 0, 255, 255, 255, 255]);
-        assert_eq!(chain[1].rgba8, [128, 128, 128, 128]);
+        // Normals +x and -x average to the zero vector: x and y at code 128 (not sRGB 188),
+        // 1 - z at 254 (code 128 is z = 0.004): a mean normal, as short as its texels disagree.
+        let chain = mip_chain_for(TextureUse::Normal, 2, 1, &[255, 128, 128, 255, 0, 128, 128, 255], 0.0);
+        assert_eq!(chain[1].rgba8, [128, 128, 254, 255]);
+        // A flat height map is the flat normal at every level.
+        let chain = mip_chain_for(TextureUse::Height, 2, 2, &[90; 16], 0.0);
+        assert!(chain.iter().all(|l| l.rgba8.chunks_exact(4).all(|p| p == [128, 128, 0, 255])));
     }
 
     #[test]
@@ -249,7 +285,7 @@ mod tests {
         // at 255. Scaling them to the cutoff (the smallest scale that keeps the coverage) would
         // make any filtered lookup across the cut fall under it.
         let src: Vec<u8> = (0..64u32 * 64).flat_map(|i| [if i % 64 < 32 { 255 } else { 0 }; 4]).collect();
-        let chain = mip_chain_for(TextureUse::Mask, 64, 64, &src);
+        let chain = mip_chain_for(TextureUse::Mask, 64, 64, &src, 0.0);
         for (k, level) in chain.iter().enumerate().take(6) {
             let alphas: Vec<u8> = level.rgba8.chunks_exact(4).map(|p| p[3]).collect();
             assert!(alphas.iter().all(|&a| a == 0 || a == 255), "level {k}: {alphas:?}");
@@ -263,8 +299,8 @@ mod tests {
         let src: Vec<u8> =
             (0..64u32 * 64).flat_map(|i| [(i.wrapping_mul(2_654_435_761) >> 24) as u8 % 241; 4]).collect();
         let c0 = coverage(&src, 1.0);
-        let kept = mip_chain_for(TextureUse::Mask, 64, 64, &src);
-        let plain = mip_chain_for(TextureUse::Height, 64, 64, &src);
+        let kept = mip_chain_for(TextureUse::Mask, 64, 64, &src, 0.0);
+        let plain = mip_chain_for(TextureUse::Color, 64, 64, &src, 0.0); // alpha averaged as it is
         for k in 1..=3 {
             let (c, p) = (coverage(&kept[k].rgba8, 1.0), coverage(&plain[k].rgba8, 1.0));
             assert!((c - c0).abs() <= 0.1, "level {k}: coverage {c}, level 0 {c0}");

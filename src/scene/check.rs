@@ -116,8 +116,8 @@ impl Scene {
                 Some(_) => {}
             }
         }
-        if !m.bump_scale.is_finite() {
-            return Err(format!("material {k} `{}`: bump_scale not finite", m.name));
+        if !m.relief.value().is_finite() {
+            return Err(format!("material {k} `{}`: relief not finite", m.name));
         }
         Ok(())
     }

@@ -197,11 +197,14 @@ pub(crate) struct MaterialDef {
     /// Tangent-space normal map (OpenGL convention).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub normal_texture: Option<String>,
-    /// Height map (mean of r, g, b), displacing by `bump_scale` scene units per unit height.
+    /// Height map (mean of r, g, b): by default a relief of `scene::DEFAULT_RELIEF` of the
+    /// texture's tile per unit height, `bump_relief` times that, or `bump_scale` scene units.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bump_texture: Option<String>,
-    #[serde(default = "one")]
-    pub bump_scale: f32,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bump_scale: Option<f32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bump_relief: Option<f32>,
     #[serde(default)]
     pub normal_maps: NormalMaps,
 }
@@ -434,6 +437,7 @@ pub(crate) const MATERIAL_KEYS: &[&str] = &[
     "normal_texture",
     "bump_texture",
     "bump_scale",
+    "bump_relief",
     "normal_maps",
 ];
 pub(crate) const OBJECT_KEYS: &[&str] = &[
@@ -921,7 +925,7 @@ impl TextureSet {
             albedo_texture: self.map(&m.albedo_texture, MapKind::Color)?,
             mask_texture: self.map(&m.mask_texture, MapKind::Mask)?,
             normal_texture,
-            bump_scale: m.bump_scale,
+            relief: Relief::Tile(m.bump_multiplier),
             specular: m.specular,
             shininess: m.shininess,
             emission: m.emission,
@@ -1136,13 +1140,27 @@ fn build_materials(
     Ok((materials, by_name))
 }
 
+/// A material's relief: `bump_scale` (scene units per unit height) or `bump_relief` (times
+/// the default relief in texture space), not both; neither is the default.
+fn material_relief(ctx: &Ctx, key: &str, m: &MaterialDef) -> Result<Relief, SceneError> {
+    match (m.bump_scale, m.bump_relief) {
+        (Some(_), Some(_)) => Err(ctx.invalid(
+            format!("{key}.bump_relief"),
+            "give bump_scale (scene units per unit height) or bump_relief (times the default relief), not both",
+        )),
+        (Some(v), None) => Ok(Relief::Units(ctx.scalar(&format!("{key}.bump_scale"), v)?)),
+        (None, Some(v)) => Ok(Relief::Tile(ctx.scalar(&format!("{key}.bump_relief"), v)?)),
+        (None, None) => Ok(Relief::default()),
+    }
+}
+
 /// One `[[materials]]` entry (at `key`), checked, with its textures loaded.
 fn build_material(ctx: &Ctx, key: &str, m: &MaterialDef, textures: &mut TextureSet) -> Result<Material, SceneError> {
     let shininess = ctx.scalar(&format!("{key}.shininess"), m.shininess)?;
     if shininess < 0.0 {
         return Err(ctx.invalid(format!("{key}.shininess"), "must be >= 0"));
     }
-    let bump_scale = ctx.scalar(&format!("{key}.bump_scale"), m.bump_scale)?;
+    let relief = material_relief(ctx, key, m)?;
     if m.normal_texture.is_some() && m.bump_texture.is_some() {
         return Err(ctx.invalid(format!("{key}.bump_texture"), "give normal_texture or bump_texture, not both"));
     }
@@ -1164,7 +1182,7 @@ fn build_material(ctx: &Ctx, key: &str, m: &MaterialDef, textures: &mut TextureS
         albedo_texture,
         mask_texture,
         normal_texture,
-        bump_scale,
+        relief,
         specular: ctx.color(&format!("{key}.specular"), m.specular)?,
         shininess,
         emission: ctx.color(&format!("{key}.emission"), m.emission)?,

@@ -2,6 +2,8 @@
 //! height maps, each turned into the encoding its `TextureUse` names.
 
 use super::types::TextureUse;
+#[cfg(test)]
+use super::types::DEFAULT_RELIEF;
 
 /// Coverage of a `map_d` image in every channel: its alpha where it has any (an RGBA cutout),
 /// otherwise its red channel (greyscale masks stored as RGB, as in Crytek's Sponza).
@@ -62,6 +64,58 @@ pub fn normal_map(mut rgba8: Vec<u8>, y_down: bool) -> Vec<u8> {
         }
     }
     rgba8
+}
+
+/// A decoded tangent-space vector from a stored texel ((c + 1) / 2 per component, 8 bits).
+fn decode_normal(p: &[u8]) -> [f32; 3] {
+    [p[0], p[1], p[2]].map(|c| f32::from(c) / 127.5 - 1.0)
+}
+
+/// A unit vector as a texel of the GPU's normal maps (0..1 each, alpha 1): (x + 1) / 2,
+/// (y + 1) / 2 and 1 - z, decoded by `decode_tangent` in glsl/include/material.glsl. Every
+/// data texture is stored sRGB-encoded (render::scene_gpu::upload_texture), whose steps are
+/// finest near 0 and coarsest (0.9%) near 1: z near 1, the common case, is stored as 1 - z
+/// near 0. A stored unit vector's length is within [`STORED_NORMAL_ERROR`] of 1, which the
+/// shaders' filtered reads take as agreement. A z under 0 (facing into the surface) is stored
+/// as 0.
+pub(crate) fn encode_unit(n: [f32; 3]) -> [f32; 4] {
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    let n = if len > 1e-6 { n.map(|c| c / len) } else { [0.0, 0.0, 1.0] };
+    [n[0] * 0.5 + 0.5, n[1] * 0.5 + 0.5, 1.0 - n[2].max(0.0), 1.0]
+}
+
+/// How much shorter than 1 a stored unit vector with z >= 0.5 (tilted up to 60 degrees) can
+/// decode (1.23%, at x or y near +-0.87 where the sRGB steps are coarse): mirrors
+/// `STORED_NORMAL_ERROR` in glsl/include/material.glsl, checked over every such direction by
+/// render::texture's tests.
+pub const STORED_NORMAL_ERROR: f32 = 0.013;
+
+/// Level 0 of a normal map as the GPU reads it: every texel a unit vector (a zero one, the
+/// flat normal), so that the mean of a mip texel's normals is shorter than 1 exactly where
+/// they disagree (what the shaders' filtered reads measure: glsl/include/material.glsl).
+pub fn unit_normals(rgba8: &[u8]) -> Vec<[f32; 4]> {
+    rgba8.chunks_exact(4).map(|p| encode_unit(decode_normal(p))).collect()
+}
+
+/// Level 0 of a height map (heights in alpha) as the GPU reads it: the tangent-space normal
+/// map (OpenGL convention) of the surface displaced `relief` of a tile (a unit of UV) per unit
+/// of height, from central differences one texel apart (repeat). On a surface whose UVs are
+/// conformal (dP/du and dP/dv orthogonal, of one length a), this is exactly the bump-mapped
+/// normal of a relief of `relief * a` scene units per unit height (render::relief).
+pub fn normals_from_heights(width: u32, height: u32, rgba8: &[u8], relief: f32) -> Vec<[f32; 4]> {
+    let (w, h) = (width as usize, height as usize);
+    let at = |x: usize, y: usize| f32::from(rgba8[(y * w + x) * 4 + 3]) / 255.0;
+    let mut out = Vec::with_capacity(w * h);
+    for y in 0..h {
+        for x in 0..w {
+            // Per unit of UV: one texel is 1 / width of u and 1 / height of (top-down) v.
+            let dhdu = (at((x + 1) % w, y) - at((x + w - 1) % w, y)) * width as f32 / 2.0;
+            let dhdv = (at(x, (y + 1) % h) - at(x, (y + h - 1) % h)) * height as f32 / 2.0;
+            // +y of the tangent frame is up the image, against top-down v.
+            out.push(encode_unit([-relief * dhdu, relief * dhdv, 1.0]));
+        }
+    }
+    out
 }
 
 /// Which use a `bump`/`map_bump` image has, by its content.
@@ -130,6 +184,30 @@ mod tests {
         let stored = normal_map(vec![0, 0, 0, 255, 100, 60, 240, 255], true);
         assert_eq!(stored, [128, 128, 255, 255, 100, 195, 240, 255]);
         assert_eq!(normal_map(vec![100, 60, 240, 255], false), [100, 60, 240, 255]);
+    }
+
+    #[test]
+    fn normal_maps_are_read_as_unit_vectors() {
+        let n = unit_normals(&[255, 128, 128, 255, 128, 128, 255, 255]);
+        // (255, 128, 128): +x, stored (x + 1) / 2, (y + 1) / 2, 1 - z.
+        assert!((n[0][0] - 1.0).abs() < 1e-4 && (n[0][1] - 0.5).abs() < 0.01 && (n[0][2] - 1.0).abs() < 0.01);
+        assert!(n[1].iter().zip([0.5, 0.5, 0.0, 1.0]).all(|(a, b)| (a - b).abs() < 0.003), "flat: {:?}", n[1]);
+    }
+
+    #[test]
+    fn a_height_ramp_becomes_the_normal_of_its_slope() {
+        // Heights rising along u by 1/255 a texel, over 8 x 2 texels (away from the wrap).
+        let heights: Vec<u8> = (0..2).flat_map(|_| (0..8u8).flat_map(|x| [x; 4])).collect();
+        let n = normals_from_heights(8, 2, &heights, DEFAULT_RELIEF);
+        let slope = DEFAULT_RELIEF * 8.0 / 255.0; // dh/du = 8 / 255 per unit of UV
+        let want = encode_unit([-slope, 0.0, 1.0]);
+        for c in 0..3 {
+            assert!((n[3][c] - want[c]).abs() < 1e-6, "{:?} against {want:?}", n[3]);
+        }
+        // Rising down the image (top-down v): the normal leans up the image, +y.
+        let down: Vec<u8> = (0..8u8).flat_map(|y| [y * 4; 4].repeat(2)).collect();
+        let n = normals_from_heights(2, 8, &down, DEFAULT_RELIEF);
+        assert!(n[2 * 3][1] > 0.5 && (n[2 * 3][0] - 0.5).abs() < 1e-6, "{:?}", n[6]);
     }
 
     #[test]

@@ -52,8 +52,9 @@ pub(crate) struct MtlMaterial {
     pub mask_texture: Option<MtlMap>,
     /// `bump`, `map_bump` or `norm`, with what it is.
     pub bump: Option<(MtlMap, MapKind)>,
-    /// `-bm` of the bump statement.
-    pub bump_scale: f32,
+    /// `-bm` of the bump statement: multiplies the map's heights (the MTL spec's "bump
+    /// multiplier"), so the relief is this times `scene::DEFAULT_RELIEF`.
+    pub bump_multiplier: f32,
 }
 
 /// A texture statement's resolved, existing file.
@@ -86,7 +87,7 @@ impl MtlMaterial {
             albedo_texture: None,
             mask_texture: None,
             bump: None,
-            bump_scale: 1.0,
+            bump_multiplier: 1.0,
         }
     }
 }
@@ -547,7 +548,7 @@ pub(crate) fn parse_mtl(path: &Path, text: &str) -> Result<Vec<MtlMaterial>, Sce
                     // normal map: decided by the image at load. `norm` is a normal map.
                     _ => {
                         cur.bump = Some((map, if kw == "norm" { MapKind::Normal } else { MapKind::Bump }));
-                        cur.bump_scale = bm.unwrap_or(cur.bump_scale);
+                        cur.bump_multiplier = bm.unwrap_or(cur.bump_multiplier);
                     }
                 }
             }

@@ -904,7 +904,7 @@ fn material_maps_load_by_kind() {
         (tex(wall.normal_texture).usage, tex(wall.normal_texture).rgba8.clone()),
         (TextureUse::Height, vec![120; 4])
     );
-    assert_eq!((wall.bump_scale, leaf.bump_scale), (0.25, 1.0));
+    assert_eq!((wall.relief, leaf.relief), (Relief::Tile(0.25), Relief::Tile(1.0)));
     assert_eq!(
         scene("opengl").textures.iter().find(|t| t.usage == TextureUse::Normal).unwrap().rgba8,
         [100, 60, 240, 255]
@@ -917,6 +917,15 @@ fn material_maps_load_by_kind() {
         &format!("{CAMERA}[[materials]]\nname = \"t\"\nnormal_texture = \"tex/ddn.png\"\nbump_texture = \"tex/bricks.png\"\n"),
     );
     assert_msg(&err_of(load_default(&p)), &["s2.toml", "materials.0.bump_texture", "not both"]);
+    // A relief in scene units or in times the default, not both; neither is the default.
+    let bump = |extra: &str| {
+        let text = format!("{CAMERA}[[materials]]\nname = \"t\"\nbump_texture = \"tex/bricks.png\"\n{extra}");
+        load_default(&write(dir.path(), "s3.toml", &text))
+    };
+    assert_eq!(bump("").unwrap().materials[0].relief, Relief::Tile(1.0));
+    assert_eq!(bump("bump_scale = 0.02\n").unwrap().materials[0].relief, Relief::Units(0.02));
+    assert_eq!(bump("bump_relief = 3\n").unwrap().materials[0].relief, Relief::Tile(3.0));
+    assert_msg(&err_of(bump("bump_scale = 0.02\nbump_relief = 3\n")), &["s3.toml", "materials.0.bump_relief", "not both"]);
 }
 
 #[test]

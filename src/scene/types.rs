@@ -184,8 +184,9 @@ pub struct Material {
     /// Normal perturbation, in the G-buffer and the path tracer alike: a tangent-space normal
     /// map (`TextureUse::Normal`) or a height map (`TextureUse::Height`).
     pub normal_texture: Option<u32>,
-    /// A height map's displacement in scene units per unit of height (MTL `-bm`, default 1).
-    pub bump_scale: f32,
+    /// How deep a height map's relief is: by default [`DEFAULT_RELIEF`] of the texture's tile
+    /// per unit of height, whatever the scene's unit.
+    pub relief: Relief,
     /// Specular reflectance Ks; the lobe is Ks * (n+8)/(8 pi) * (N.H)^n.
     pub specular: Vec3,
     /// Blinn-Phong exponent n (Ns), >= 0.
@@ -203,7 +204,7 @@ impl Material {
             albedo_texture: None,
             mask_texture: None,
             normal_texture: None,
-            bump_scale: 1.0,
+            relief: Relief::default(),
             specular: Vec3::ZERO,
             shininess: 1.0,
             emission: Vec3::ZERO,
@@ -215,6 +216,37 @@ impl Material {
     }
     pub fn is_glossy(&self) -> bool {
         self.specular.max_element() > 0.0
+    }
+}
+
+/// A height map's relief per unit of height, in the texture's own space: this fraction of one
+/// tile (one unit of UV). A 0..1 map is a relief of 1% of its tile whatever the scene's unit
+/// and the map's resolution, so the same stone reads the same in a scene in metres or in
+/// centimetres (issue 42: one metre per unit height, the old default, made a cathedral in
+/// metres 29% darker than without its maps). scenes/FORMAT.md says how it was chosen.
+pub const DEFAULT_RELIEF: f32 = 0.01;
+
+/// How deep a height map's relief is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Relief {
+    /// `m` times [`DEFAULT_RELIEF`] (texture space): the MTL's `-bm m` (the spec's "bump
+    /// multiplier", which multiplies the map's values), the scene file's `bump_relief`.
+    Tile(f32),
+    /// Scene units per unit of height (pbrt's and Mitsuba's bump mapping): `bump_scale`.
+    Units(f32),
+}
+
+impl Default for Relief {
+    fn default() -> Self {
+        Relief::Tile(1.0)
+    }
+}
+
+impl Relief {
+    pub fn value(self) -> f32 {
+        match self {
+            Relief::Tile(v) | Relief::Units(v) => v,
+        }
     }
 }
 
@@ -233,8 +265,9 @@ pub enum TextureUse {
     /// Tangent-space unit normal, each component c stored as (c + 1) / 2, linear. OpenGL
     /// convention: +x along +u, +y along +v of the OBJ's UVs (up in the image), +z outwards.
     Normal,
-    /// Height in [0, 1] in every channel, linear: the surface is displaced along its normal by
-    /// `Material::bump_scale` scene units per unit of height (pbrt's bump mapping).
+    /// Height in [0, 1] in every channel, linear. Uploaded as the tangent-space normal map of
+    /// the surface displaced [`DEFAULT_RELIEF`] tiles per unit of height (`scene::maps`);
+    /// `Material::relief` scales it.
     Height,
 }
 
