@@ -49,6 +49,13 @@ void main() {
     vec3 albedo = albedo_facing.rgb;
     vec4 ns = texelFetch(g_normal, px, 0);
     vec3 N = safe_normalize(ns.xyz, vec3(0.0, 1.0, 0.0));
+    // The normal is a footprint's mean (gbuffer.frag), shorter than 1 where a normal or height
+    // map's normals disagree: the diffuse term takes the mean's cosine, |mean| (N . l), the
+    // mean of its normals' cosines wherever none faces away (material.glsl); the specular
+    // lobe takes the mean's direction. Within the 16-bit float storage's error of a unit
+    // normal the length is 1, so unmapped surfaces shade as they did.
+    float agreement = length(ns.xyz);
+    agreement = agreement >= 1.0 - HALF_NORMAL_ERROR ? 1.0 : agreement;
     vec4 ks_facing = texelFetch(g_specular, px, 0);
     vec3 ks = ks_facing.rgb;
     vec3 ng = oct_decode(vec2(albedo_facing.a, ks_facing.a));
@@ -62,13 +69,9 @@ void main() {
         Light l = lights[i];
         LightSample s = sample_light(l, P);
         float cos_theta = dot(N, s.wi);
-        // The diffuse term's cosine is the footprint's mean normal's (gbuffer.frag: shorter
-        // than 1 where a normal map's normals disagree), the mean of its normals' cosines
-        // wherever none faces away (material.glsl); the specular lobe's is the mean's direction.
-        float cos_mean = dot(ns.xyz, s.wi);
         // Light from behind the geometric surface is blocked (the path tracer's rule), also
         // where a smoothed shading normal still faces it.
-        if (max(cos_theta, cos_mean) <= 0.0 || dot(ng, s.wi) <= 0.0 || max(s.irradiance.r, max(s.irradiance.g, s.irradiance.b)) <= 0.0) {
+        if (cos_theta <= 0.0 || dot(ng, s.wi) <= 0.0 || max(s.irradiance.r, max(s.irradiance.g, s.irradiance.b)) <= 0.0) {
             continue;
         }
         float vis = 1.0;
@@ -80,8 +83,8 @@ void main() {
             vis = shadow_visibility(shadow_map, views[layer], layer, P, ng, s.wi, s.distance,
                                     frame.shadow.x, frame.shadow.y, frame.shadow.z);
         }
-        vec3 f = brdf_diffuse(albedo) * max(cos_mean, 0.0) + brdf_specular(ks, ns.a, N, V, s.wi) * max(cos_theta, 0.0);
-        radiance += f * s.irradiance * vis;
+        vec3 f = brdf_diffuse(albedo) * agreement + brdf_specular(ks, ns.a, N, V, s.wi);
+        radiance += f * s.irradiance * cos_theta * vis;
     }
     vec3 indirect = vec3(0.0);
     float ao = 1.0;

@@ -334,3 +334,62 @@ fn shadow_maps_are_redrawn_only_when_their_inputs_change_and_match_a_redraw() {
     }
     assert_no_validation_messages(&ctx);
 }
+
+/// `render.exposure = "auto"` runs on the GPU (glsl/exposure.comp): its EV is the host's
+/// (metrics::auto_exposure of the read-back radiance, f64) within float error, the display
+/// image is the host's display transform at that EV to within one code in a thousandth of the
+/// values, and the passes run only with "auto". In the window (eased) a light four times as
+/// strong moves the shown EV part of the way at once, then all the way (-2 EV).
+#[test]
+fn automatic_exposure_runs_on_the_gpu_and_eases_in_the_window() {
+    let ctx = context();
+    let scene = cornell(&[("gi.mode", "\"none\""), ("render.exposure", "\"auto\"")]);
+    let (t, settings) = (scene.settings.time, scene.settings.clone());
+    let mut r = dvsgi::render::Renderer::new(&ctx, scene).expect("renderer");
+    r.render(t, true).expect("frame");
+    assert!(r.last_pass_names().iter().any(|p| p == "exposure"), "{:?}", r.last_pass_names());
+    let out = r.output();
+    let linear = dvsgi::metrics::LinearImage {
+        width: out.width,
+        height: out.height,
+        rgb: out.radiance.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect(),
+    };
+    let (gpu, host) = (r.auto_exposure().expect("an EV"), dvsgi::metrics::auto_exposure(&linear));
+    println!("auto exposure: GPU {gpu} EV, host {host} EV");
+    assert!((gpu - host).abs() < 1e-4, "GPU {gpu} against host {host}");
+    let twin = dvsgi::metrics::display_srgb8(&linear, settings.exposure + host, settings.tonemap);
+    let shown: Vec<u8> = out.display.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+    let off: Vec<u8> = shown.iter().zip(&twin).map(|(a, b)| a.abs_diff(*b)).filter(|d| *d > 0).collect();
+    println!("display against the host's twin: {} of {} values differ", off.len(), shown.len());
+    assert!(off.iter().all(|d| *d <= 1) && off.len() * 1000 <= shown.len(), "{} values differ", off.len());
+
+    // (Frames read back: their host-read barrier makes the EV visible to the host.)
+    // Eased: the first frame takes its EV at once; a light 4x as strong moves it by less than
+    // half of -2 EV in the next frame (rendered at once), and all the way given time.
+    r.ease_exposure(Some(0.5));
+    r.render(t, true).expect("frame");
+    r.wait_idle().expect("idle");
+    let before = r.auto_exposure().unwrap();
+    for l in &mut r.scene.lights {
+        if let LightKind::Point { intensity, .. } = &mut l.kind {
+            *intensity *= 4.0;
+        }
+    }
+    r.render(t, true).expect("frame");
+    r.wait_idle().expect("idle");
+    let next = r.auto_exposure().unwrap();
+    std::thread::sleep(std::time::Duration::from_secs(3));
+    r.render(t, true).expect("frame");
+    r.wait_idle().expect("idle");
+    let settled = r.auto_exposure().unwrap();
+    println!("eased: {before} -> {next} -> {settled} EV");
+    assert!(next < before && next > before - 1.0, "{before} -> {next}");
+    assert!((settled - (before - 2.0)).abs() < 0.02, "{before} -> {settled}");
+
+    r.scene.settings.exposure_auto = false;
+    r.render(t, false).expect("frame");
+    assert!(!r.last_pass_names().iter().any(|p| p.starts_with("exposure")));
+    assert_eq!(r.auto_exposure(), None);
+    drop(r);
+    assert_no_validation_messages(&ctx);
+}

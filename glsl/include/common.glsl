@@ -20,7 +20,13 @@ struct FrameData {
     vec4 radiance_scale;  // x: 16-bit radiance targets hold radiance * x (a power of two), y = 1/x
     uvec4 voxel;       // x voxel updates before this frame's, y this update's bounce interleave (1: all voxels),
                        // z frames in the rt reflections' history (0: none), w the frame's number
+    vec4 exposure;     // x 1: "auto" (tonemap.comp adds exposure.comp's EV to shadow.w's), y how far the
+                       // shown EV moves to this frame's (1: all the way; the viewer eases it)
 };
+
+// How far from 1 the length of a unit vector stored in three 16-bit floats can be (each
+// component within 2^-11 of its value, relative: at most sqrt(3) 2^-11 = 0.00085).
+const float HALF_NORMAL_ERROR = 0.001;
 
 // Normalize, or `fallback` for a zero-length / non-finite vector.
 vec3 safe_normalize(vec3 v, vec3 fallback) {

@@ -12,6 +12,7 @@ use super::passes::resolve::ResolvePass;
 use super::passes::rsm::{RsmGatherPass, RsmMaps, RsmPass};
 use super::passes::rt_shadow::RtShadowPass;
 use super::passes::shadow::ShadowMaps;
+use super::passes::exposure::ExposurePasses;
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::upload::UploadPass;
 use super::passes::voxel_bounce::{BounceComposePass, VoxelBouncePass};
@@ -533,6 +534,8 @@ pub struct FramePasses {
     pub shading: Shading,
     /// Only with `render.supersample` > 1: radiance samples to output pixels.
     pub resolve: Option<ResolvePass>,
+    /// Only run with `render.exposure = "auto"`: the EV the tone map adds.
+    pub exposure: ExposurePasses,
     pub tonemap: TonemapPass,
     /// Created on the first frame whose output is read back (not for benchmarks).
     pub readback: Option<ReadbackPasses>,
@@ -552,6 +555,8 @@ pub struct FrameState {
     pub relight: bool,
     /// Copy the outputs for the host.
     pub readback: bool,
+    /// `render.exposure = "auto"`: the exposure passes run before the tone map.
+    pub auto_exposure: bool,
     /// `async-lagged`: trace cones through the voxel radiance of the previous update and
     /// relight the voxels after the trace (only once a previous update exists).
     pub lagged: bool,
@@ -623,6 +628,7 @@ impl FramePasses {
         let shadow =
             (shadow_views > 0).then(|| ShadowMaps::new(ctx, scene_gpu, frame, &atlas, shadow_views)).transpose()?;
         let shadow_cache = shadow.as_ref().and_then(|s| s.cached.as_ref()).map(|c| c.cache.clone());
+        let exposure = ExposurePasses::new(ctx, frame, &shown)?;
         Ok(FramePasses {
             upload: frame_upload(frame, scene_gpu, rays.as_ref()),
             voxels,
@@ -642,7 +648,8 @@ impl FramePasses {
             cones,
             rsm,
             shading,
-            tonemap: TonemapPass::new(ctx, frame, &shown, &display)?,
+            tonemap: TonemapPass::new(ctx, frame, &shown, &display, &exposure.state)?,
+            exposure,
             resolve,
             readback: None,
         })
@@ -683,7 +690,9 @@ impl FramePasses {
                 (None, Shading::VoxelView(v)) => v.radiance.clone(),
                 (None, Shading::MipView(v)) => v.radiance.clone(),
             };
-            self.readback = Some(ReadbackPasses::new(ctx, &radiance, &self.tonemap.display)?);
+            let mut readback = ReadbackPasses::new(ctx, &radiance, &self.tonemap.display)?;
+            readback.host.buffers.push(self.exposure.state.clone());
+            self.readback = Some(readback);
         }
         Ok(())
     }
@@ -794,6 +803,10 @@ impl FramePasses {
         }
         if let Some(r) = &self.resolve {
             passes.push(r);
+        }
+        if state.auto_exposure {
+            passes.push(&self.exposure.tiles);
+            passes.push(&self.exposure.resolve);
         }
         passes.push(&self.tonemap);
         if let (true, Some(r)) = (state.readback, &self.readback) {

@@ -46,6 +46,9 @@ pub struct FrameUniforms {
     /// x: voxel updates before this frame's; y: this update's bounce interleave (1: the
     /// bounce gathers for every voxel; see `gi.bounce_interleave`).
     pub voxel: [u32; 4],
+    /// x: 1 with `render.exposure = "auto"` (the tone map adds the exposure passes' EV);
+    /// y: how far the shown EV moves to this frame's (1: all the way; [`Renderer::ease_exposure`]).
+    pub exposure: [f32; 4],
 }
 
 /// Per-frame data from the host, shared by the passes. The buffers are device-local and
@@ -141,6 +144,9 @@ pub struct Renderer {
     voxel_updates: u64,
     /// What the ray-traced reflections' history was accumulated under.
     history: ReflectionHistory,
+    /// The viewer's easing of automatic exposure: its time constant (s) and when the last
+    /// frame was written ([`Renderer::ease_exposure`]).
+    exposure_easing: Option<(f32, Option<std::time::Instant>)>,
 }
 
 /// The view and scene time the rt reflections' history holds, and how many frames it holds.
@@ -231,6 +237,7 @@ impl Renderer {
             uniforms: FrameUniforms::zeroed(),
             voxel_updates: 0,
             history: ReflectionHistory::default(),
+            exposure_easing: None,
         })
     }
 
@@ -274,7 +281,34 @@ impl Renderer {
             lagged: self.scheduler.mode() == Mode::AsyncLagged,
             bounces,
             feed_back,
+            auto_exposure: self.scene.settings.exposure_auto,
         }
+    }
+
+    /// Ease the automatic exposure the window shows towards each frame's with time constant
+    /// `seconds` of wall-clock time (eye adaptation), or (None) take each frame's at once, as
+    /// files do.
+    pub fn ease_exposure(&mut self, seconds: Option<f32>) {
+        self.exposure_easing = seconds.filter(|s| *s > 0.0).map(|s| (s, None));
+    }
+
+    /// How far the shown EV moves to this frame's: 1 - exp(-dt / tau) since the last frame
+    /// where the exposure is eased, otherwise all the way.
+    fn exposure_step(&mut self) -> f32 {
+        let Some((tau, last)) = &mut self.exposure_easing else { return 1.0 };
+        let now = std::time::Instant::now();
+        let step = last.map_or(1.0, |l| 1.0 - (-(now - l).as_secs_f32() / *tau).exp());
+        *last = Some(now);
+        step
+    }
+
+    /// The EV `render.exposure = "auto"` adds, as the last frame that ran the exposure passes
+    /// left it (the window's, eased), or None before any or without "auto".
+    pub fn auto_exposure(&self) -> Option<f32> {
+        if !self.scene.settings.exposure_auto {
+            return None;
+        }
+        self.passes.exposure.chosen()
     }
 
     /// Names of the passes the last rendered frame ran, in order.
@@ -517,6 +551,7 @@ impl Renderer {
 
     /// Write the per-frame data for scene time `t`.
     fn update(&mut self, t: f32) -> Written {
+        let exposure_step = self.exposure_step();
         let s = &self.scene.settings;
         let cam = &self.scene.camera;
         let view = cam.view();
@@ -540,6 +575,7 @@ impl Renderer {
             shadow: [s.shadow_filter_radius, s.shadow_normal_bias, s.shadow_map_size as f32, 2f32.powf(s.exposure)],
             radiance_scale: [self.radiance_scale, 1.0 / self.radiance_scale, 0.0, 0.0],
             voxel: [0; 4],
+            exposure: [if s.exposure_auto { 1.0 } else { 0.0 }, exposure_step, 0.0, 0.0],
         };
         let upload = &self.passes.upload;
         let bounds = self.scene.world_bounds(t);
@@ -639,16 +675,12 @@ impl Renderer {
     /// If no frame was rendered with `readback = true`.
     pub fn output(&self) -> FrameOutput {
         let rb = self.passes.readback.as_ref().expect("render(t, true) before output()");
-        let mut out = FrameOutput {
+        FrameOutput {
             width: self.width,
             height: self.height,
             radiance: bytemuck::pod_collect_to_vec::<u8, f32>(rb.radiance.bytes()),
             display: rb.display.bytes().to_vec(),
-        };
-        if self.scene.settings.exposure_auto {
-            out.display = auto_exposed_display(&out, &self.scene.settings);
         }
-        out
     }
 }
 
@@ -659,19 +691,6 @@ struct Written {
     views: Vec<lights::GpuShadowView>,
     /// The instance table.
     instances: Vec<u8>,
-}
-
-/// The frame's display image (RGBA8) at the exposure `render.exposure = "auto"` picks for its
-/// radiance, through the CPU twin of the tone-map pass (metrics::display_srgb8).
-fn auto_exposed_display(frame: &FrameOutput, settings: &crate::scene::RenderSettings) -> Vec<u8> {
-    let linear = crate::metrics::LinearImage {
-        width: frame.width,
-        height: frame.height,
-        rgb: crate::output::radiance_rgb(frame),
-    };
-    let ev = crate::metrics::display_exposure(settings, &linear);
-    let rgb = crate::metrics::display_srgb8(&linear, ev, settings.tonemap);
-    rgb.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect()
 }
 
 impl Drop for Renderer {

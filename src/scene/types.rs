@@ -795,9 +795,10 @@ pub struct RenderSettings {
     pub time: f32,
     /// Exposure in EV stops: displayed value = radiance * 2^exposure before the tone map.
     pub exposure: f32,
-    /// `render.exposure = "auto"`: each display image (PNG) is exposed so that its log-average
-    /// luminance lands on middle grey (metrics::auto_exposure), `exposure` then being 0. EXR
-    /// output is linear radiance either way.
+    /// `render.exposure = "auto"`: each display image (the window, PNGs) is exposed so that
+    /// its log-average luminance lands on middle grey (glsl/exposure.comp for rendered frames,
+    /// metrics::auto_exposure for path-traced ones), added to `exposure`. EXR output is linear
+    /// radiance either way.
     pub exposure_auto: bool,
     pub tonemap: ToneMap,
     /// Side of each shadow-map view in texels.

@@ -47,6 +47,8 @@ impl Drop for Gpu {
 /// A script's frames advance scene time by this much, so a script renders the same frames on
 /// every machine.
 const SCRIPT_DT: f32 = 1.0 / 30.0;
+/// Time constant of the window's automatic exposure easing (eye adaptation), seconds.
+const EXPOSURE_EASING_S: f32 = 0.5;
 
 /// The viewer.
 pub struct Viewer {
@@ -132,7 +134,8 @@ impl Viewer {
         self.time = scene.settings.time;
         self.rig = Some(CameraRig::new(&scene.camera, scene_extent(&scene)));
         let render_size = (scene.settings.width, scene.settings.height);
-        let renderer = Renderer::with_options(&ctx, scene, options)?;
+        let mut renderer = Renderer::with_options(&ctx, scene, options)?;
+        renderer.ease_exposure(self.exposure_easing());
         let mut ui = ui_renderer(&ctx, format, options.frames_in_flight as usize)?;
         let texture = FrameTexture::new(&ctx, &mut ui, render_size)?;
         let upload = UploadPool::new(&ctx)?;
@@ -267,6 +270,7 @@ impl Viewer {
             camera: rig.mode,
             paused: self.paused,
             exposure: s.exposure,
+            auto_exposure: s.exposure_auto.then(|| gpu.renderer.auto_exposure()),
         };
         let present_mode = gpu.swapchain.as_ref().map(|s| format!("{:?}", s.present_mode)).unwrap_or_default();
         let timings = TimingsView {
@@ -320,14 +324,21 @@ impl Viewer {
         Ok(())
     }
 
-    /// A setting: the exposure changes in place, anything else rebuilds the renderer (or, if
-    /// the renderer refuses the new settings, is undone and said in the UI).
+    /// Automatic exposure eases over this many seconds in the window (eye adaptation), but
+    /// not under a script, whose frames must be what `dvsgi render` makes of them.
+    fn exposure_easing(&self) -> Option<f32> {
+        self.script.is_none().then_some(EXPOSURE_EASING_S)
+    }
+
+    /// A setting: the exposure (a number, or "auto") changes in place, anything else rebuilds
+    /// the renderer (or, if the renderer refuses the new settings, is undone and said in the UI).
     fn set(&mut self, key: &str, value: &str) -> crate::Result<()> {
         let previous = self.settings.set(key, value);
         if key == "render.exposure" {
-            if let (Some(gpu), Ok(ev)) = (&mut self.gpu, value.parse::<f32>()) {
+            let auto = value.trim_matches('"') == "auto";
+            if let (Some(gpu), Ok(ev)) = (&mut self.gpu, if auto { Ok(0.0) } else { value.parse::<f32>() }) {
                 gpu.renderer.scene.settings.exposure = ev;
-                gpu.renderer.scene.settings.exposure_auto = false;
+                gpu.renderer.scene.settings.exposure_auto = auto;
                 return Ok(());
             }
         }
@@ -352,12 +363,14 @@ impl Viewer {
 
     /// A new renderer for the current settings, replacing the old once it exists.
     fn rebuild(&mut self) -> crate::Result<()> {
+        let easing = self.exposure_easing();
         let Some(gpu) = self.gpu.as_mut() else { return Ok(()) };
         let scene = self.settings.load()?;
         let size = (scene.settings.width, scene.settings.height);
         gpu.renderer.wait_idle()?;
         let options = RenderOptions { mode: self.settings.schedule, ..RenderOptions::default() };
         gpu.renderer = Renderer::with_options(&gpu.ctx, scene, options)?;
+        gpu.renderer.ease_exposure(easing);
         let e = gpu.texture.image.desc.extent;
         if (e.width, e.height) != size {
             idle(&gpu.ctx)?;

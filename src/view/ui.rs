@@ -91,6 +91,8 @@ pub struct SettingsView<'a> {
     pub camera: CameraMode,
     pub paused: bool,
     pub exposure: f32,
+    /// With `render.exposure = "auto"`: the EV it chose (eased), once a frame has run.
+    pub auto_exposure: Option<Option<f32>>,
 }
 
 /// The whole window: settings on the left, timings at the bottom, the frame in the middle.
@@ -185,12 +187,29 @@ pub fn settings(ui: &mut egui::Ui, v: &SettingsView, actions: &mut Vec<Action>) 
     if view == "\"voxel-mip\"" {
         knob_ui(ui, &Knob::Number("render.view_lod", "mip level", 0.0, 8.0), v, actions);
     }
-    let mut ev = v.exposure;
+    exposure(ui, v, actions);
+    ui.separator();
+    camera(ui, v, actions);
+}
+
+/// The exposure: "auto" (GPU, eased; the EV it chose shown beside it) or a slider in EV; the
+/// slider starts from what "auto" chose.
+fn exposure(ui: &mut egui::Ui, v: &SettingsView, actions: &mut Vec<Action>) {
+    let chosen = v.auto_exposure.flatten();
+    let mut auto = v.auto_exposure.is_some();
+    ui.horizontal(|ui| {
+        if ui.checkbox(&mut auto, "auto exposure").changed() {
+            let value = if auto { "\"auto\"".to_string() } else { format!("{:?}", v.exposure + chosen.unwrap_or(0.0)) };
+            actions.push(Action::Set("render.exposure".into(), value));
+        }
+        if let Some(ev) = chosen {
+            ui.label(format!("{:+.2} EV", v.exposure + ev));
+        }
+    });
+    let mut ev = v.exposure + chosen.unwrap_or(0.0);
     if ui.add(egui::Slider::new(&mut ev, -8.0..=8.0).text("exposure (EV)")).changed() {
         actions.push(Action::Set("render.exposure".into(), format!("{ev:?}")));
     }
-    ui.separator();
-    camera(ui, v, actions);
 }
 
 fn knob_ui(ui: &mut egui::Ui, knob: &Knob, v: &SettingsView, actions: &mut Vec<Action>) {

@@ -1,5 +1,6 @@
 //! One module per pass; each declares what it reads and writes (`Pass::uses`).
 
+pub mod exposure;
 pub mod gbuffer;
 pub mod gi_trace;
 pub mod lighting;

@@ -1,6 +1,7 @@
-//! Display transform (compute): radiance * 2^EV -> tone map -> sRGB 8-bit.
+//! Display transform (compute): radiance * 2^EV (plus the exposure passes' EV where it is
+//! "auto") -> tone map -> sRGB 8-bit.
 
-use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline};
+use crate::gpu::{shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuResult, Image, Pipeline};
 use crate::render::graph::{Pass, Use};
 use crate::render::FrameBuffers;
 use ash::vk;
@@ -12,6 +13,7 @@ pub struct TonemapPass {
     frame: FrameBuffers,
     radiance: Arc<Image>,
     pub display: Arc<Image>,
+    exposure: Arc<Buffer>,
     pipeline: Pipeline,
     set: DescriptorSet,
 }
@@ -22,15 +24,28 @@ impl TonemapPass {
         frame: &FrameBuffers,
         radiance: &Arc<Image>,
         display: &Arc<Image>,
+        exposure: &Arc<Buffer>,
     ) -> GpuResult<Self> {
         let set = DescriptorSet::new(
             ctx,
             "tonemap",
             vk::ShaderStageFlags::COMPUTE,
-            &[Bind::Uniform(&frame.uniforms), Bind::StorageImage(radiance.view), Bind::StorageImage(display.view)],
+            &[
+                Bind::Uniform(&frame.uniforms),
+                Bind::StorageImage(radiance.view),
+                Bind::StorageImage(display.view),
+                Bind::Storage(exposure),
+            ],
         )?;
         let pipeline = Pipeline::compute(ctx, "tonemap", shaders::TONEMAP_COMP, &[set.layout], 0, &[])?;
-        Ok(TonemapPass { frame: frame.clone(), radiance: radiance.clone(), display: display.clone(), pipeline, set })
+        Ok(TonemapPass {
+            frame: frame.clone(),
+            radiance: radiance.clone(),
+            display: display.clone(),
+            exposure: exposure.clone(),
+            pipeline,
+            set,
+        })
     }
 }
 
@@ -42,6 +57,7 @@ impl Pass for TonemapPass {
         let mut uses = vec![
             Use::image(&self.radiance, Access::ComputeShaderReadStorage),
             Use::overwrite(&self.display, Access::ComputeShaderWrite),
+            Use::buffer(&self.exposure, Access::ComputeShaderReadBuffer),
         ];
         uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
         uses

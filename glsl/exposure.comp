@@ -1,0 +1,68 @@
+#version 460
+// Automatic exposure (`render.exposure = "auto"`), on the GPU so that the window and every
+// PNG show what the tone map made of it: the EV that takes the log-average luminance of the
+// lit pixels (Rec. 709 luminance > 0, finite) to middle grey, metrics::AUTO_EXPOSURE_KEY, as
+// metrics::auto_exposure computes it on the host for path-traced images. Two stages (the
+// spec constant): REDUCE sums log2 luminance and counts the lit pixels of each 16 x 16 tile
+// into `partials`; RESOLVE, one workgroup, sums the tiles and writes the EV into `state`.
+// Both add in a fixed tree, never with atomics, so the EV is the same bits whatever the
+// order the tiles ran in. The viewer eases the shown EV towards each frame's
+// (frame.exposure.y < 1), as engines' eye adaptation does; files take it at once.
+#include "common.glsl"
+
+layout(constant_id = 0) const bool RESOLVE = false;
+
+layout(local_size_x = 256) in;
+
+layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
+layout(set = 0, binding = 1, rgba32f) uniform readonly image2D radiance;
+layout(set = 0, binding = 2, std430) buffer Partials { vec2 partials[]; };
+// x the EV shown (added to render.exposure), y this frame's own, z lit pixels, w frames.
+layout(set = 0, binding = 3, std430) buffer State { vec4 state; };
+
+const float KEY = 0.18;  // mirrors metrics::AUTO_EXPOSURE_KEY
+
+shared vec2 sums[256];
+
+// Sums `sums` over the workgroup, in a fixed tree: the total in sums[0].
+void reduce_shared(uint i) {
+    for (uint stride = 128u; stride > 0u; stride >>= 1) {
+        barrier();
+        if (i < stride) sums[i] += sums[i + stride];
+    }
+    barrier();
+}
+
+void main() {
+    uint i = gl_LocalInvocationIndex;
+    if (!RESOLVE) {
+        ivec2 size = imageSize(radiance);
+        ivec2 tiles = (size + 15) / 16;
+        uint tile = gl_WorkGroupID.x;
+        ivec2 px = ivec2(tile % uint(tiles.x), tile / uint(tiles.x)) * 16 + ivec2(i % 16u, i / 16u);
+        vec2 mine = vec2(0.0);
+        if (all(lessThan(px, size))) {
+            vec3 c = imageLoad(radiance, px).rgb;
+            float y = dot(c, vec3(0.2126, 0.7152, 0.0722));
+            if (!isnan(y) && !isinf(y) && y > 0.0) mine = vec2(log2(y), 1.0);
+        }
+        sums[i] = mine;
+        reduce_shared(i);
+        if (i == 0u) partials[tile] = sums[0];
+        return;
+    }
+    ivec2 size = imageSize(radiance);
+    ivec2 tiles = (size + 15) / 16;
+    uint count = uint(tiles.x * tiles.y);
+    vec2 mine = vec2(0.0);
+    for (uint t = i; t < count; t += 256u) mine += partials[t];
+    sums[i] = mine;
+    reduce_shared(i);
+    if (i == 0u) {
+        vec2 total = sums[0];
+        float ev = total.y > 0.0 ? clamp(log2(KEY) - total.x / total.y, -64.0, 64.0) : 0.0;
+        // Eased towards this frame's EV in the viewer; the first frame takes it at once.
+        float shown = state.w > 0.0 ? mix(state.x, ev, frame.exposure.y) : ev;
+        state = vec4(shown, ev, total.y, state.w + 1.0);
+    }
+}

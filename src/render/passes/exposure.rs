@@ -1,0 +1,114 @@
+//! Automatic exposure on the GPU (`render.exposure = "auto"`): glsl/exposure.comp reduces the
+//! frame's radiance to the EV that takes its lit pixels' log-average luminance to middle grey,
+//! in two passes (per 16 x 16 tile, then the tiles), into a small buffer the tone map reads.
+//! The buffer is host-visible, so the viewer can say what "auto" chose
+//! ([`ExposurePasses::chosen`]); it keeps the shown EV from frame to frame for the viewer's
+//! easing.
+
+use crate::gpu::{shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuResult, Image, Pipeline};
+use crate::render::graph::{Pass, Use};
+use crate::render::FrameBuffers;
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// Pixels per tile side of the first stage (glsl/exposure.comp).
+const TILE: u32 = 16;
+
+/// One stage of the reduction.
+pub struct ExposurePass {
+    name: &'static str,
+    resolve: bool,
+    frame: FrameBuffers,
+    radiance: Arc<Image>,
+    partials: Arc<Buffer>,
+    state: Arc<Buffer>,
+    pipeline: Pipeline,
+    set: DescriptorSet,
+}
+
+/// The two stages and the buffer they leave the EV in.
+pub struct ExposurePasses {
+    pub tiles: ExposurePass,
+    pub resolve: ExposurePass,
+    /// x the EV shown, y this frame's own, z lit pixels, w frames (glsl/exposure.comp).
+    pub state: Arc<Buffer>,
+}
+
+impl ExposurePasses {
+    pub fn new(ctx: &Arc<Context>, frame: &FrameBuffers, radiance: &Arc<Image>) -> GpuResult<Self> {
+        let e = radiance.extent2d();
+        let tiles = (e.width.div_ceil(TILE) * e.height.div_ceil(TILE)) as u64;
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let partials =
+            Arc::new(Buffer::new(ctx, "exposure tiles", tiles * 8, storage, MemoryLocation::GpuOnly)?);
+        let state = Arc::new(Buffer::new(ctx, "exposure", 16, storage, MemoryLocation::GpuToCpu)?);
+        state.write(0, &[0u8; 16]);
+        let stage = |name: &'static str, resolve: bool| -> GpuResult<ExposurePass> {
+            let set = DescriptorSet::new(
+                ctx,
+                name,
+                vk::ShaderStageFlags::COMPUTE,
+                &[
+                    Bind::Uniform(&frame.uniforms),
+                    Bind::StorageImage(radiance.view),
+                    Bind::Storage(&partials),
+                    Bind::Storage(&state),
+                ],
+            )?;
+            let spec = [(0, u32::from(resolve))];
+            let pipeline = Pipeline::compute(ctx, name, shaders::EXPOSURE_COMP, &[set.layout], 0, &spec)?;
+            Ok(ExposurePass {
+                name,
+                resolve,
+                frame: frame.clone(),
+                radiance: radiance.clone(),
+                partials: partials.clone(),
+                state: state.clone(),
+                pipeline,
+                set,
+            })
+        };
+        Ok(ExposurePasses {
+            tiles: stage("exposure (tiles)", false)?,
+            resolve: stage("exposure", true)?,
+            state: state.clone(),
+        })
+    }
+
+    /// The EV "auto" added to `render.exposure` in the last frame that ran these passes (the
+    /// one in flight may be writing it: the viewer shows it as it is), or None before any.
+    pub fn chosen(&self) -> Option<f32> {
+        let bytes = self.state.mapped()?;
+        let state: [f32; 4] = bytemuck::pod_read_unaligned(&bytes[..16]);
+        (state[3] > 0.0).then_some(state[0])
+    }
+}
+
+impl Pass for ExposurePass {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn uses(&self) -> Vec<Use<'_>> {
+        let mut uses = if self.resolve {
+            vec![
+                Use::buffer(&self.partials, Access::ComputeShaderReadBuffer),
+                Use::buffer(&self.state, Access::ComputeShaderWrite),
+            ]
+        } else {
+            vec![
+                Use::image(&self.radiance, Access::ComputeShaderReadStorage),
+                Use::buffer(&self.partials, Access::ComputeShaderWrite),
+            ]
+        };
+        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
+        uses
+    }
+    fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
+        self.pipeline.bind(cmd, &[self.set.set]);
+        let e = self.radiance.extent2d();
+        let tiles = e.width.div_ceil(TILE) * e.height.div_ceil(TILE);
+        let groups = if self.resolve { 1 } else { tiles };
+        self.pipeline.dispatch(cmd, [groups * 256, 1, 1], [256, 1, 1]);
+    }
+}
