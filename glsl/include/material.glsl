@@ -36,7 +36,7 @@ UvFrame uv_frame(vec3 dp1, vec3 dp2, vec2 duv1, vec2 duv2) {
 }
 
 // Tangent-space normals as the GPU stores them (scene::maps::encode_unit): (x + 1) / 2,
-// (y + 1) / 2, 1 - z. Height maps are uploaded as the normal maps of their default relief.
+// (y + 1) / 2, 1 - z. Height maps are uploaded as the normal maps of their material's relief.
 // A filtered texel is the mean of the unit normals it covers, shorter than 1 where they
 // disagree; a stored unit normal (z >= 0.5) decodes within STORED_NORMAL_ERROR of length 1.
 const float STORED_NORMAL_ERROR = 0.013;  // mirrors scene::maps::STORED_NORMAL_ERROR

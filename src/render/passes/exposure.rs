@@ -1,6 +1,6 @@
 //! Automatic exposure on the GPU (`render.exposure = "auto"`): glsl/exposure.comp reduces the
 //! frame's radiance to the EV that takes its lit pixels' log-average luminance to middle grey,
-//! in two passes (per 16 x 16 tile, then the tiles), into a small buffer the tone map reads.
+//! in two passes (per 32 x 32 tile, then the tiles), into a small buffer the tone map reads.
 //! The buffer is host-visible, so the viewer can say what "auto" chose
 //! ([`ExposurePasses::chosen`]); it keeps the shown EV from frame to frame for the viewer's
 //! easing.
@@ -12,8 +12,10 @@ use ash::vk;
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
-/// Pixels per tile side of the first stage (glsl/exposure.comp).
-const TILE: u32 = 16;
+/// Pixels per tile side of the first stage, and invocations per workgroup
+/// (glsl/exposure.comp).
+const TILE: u32 = 32;
+const GROUP: u32 = 64;
 
 /// One stage of the reduction.
 pub struct ExposurePass {
@@ -109,6 +111,6 @@ impl Pass for ExposurePass {
         let e = self.radiance.extent2d();
         let tiles = e.width.div_ceil(TILE) * e.height.div_ceil(TILE);
         let groups = if self.resolve { 1 } else { tiles };
-        self.pipeline.dispatch(cmd, [groups * 256, 1, 1], [256, 1, 1]);
+        self.pipeline.dispatch(cmd, [groups * GROUP, 1, 1], [GROUP, 1, 1]);
     }
 }
