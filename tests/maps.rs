@@ -551,9 +551,8 @@ fn compare_with_analytic(
 fn stored_height_normal(map: &Texture, u: f32, v: f32, scale: f32) -> Vec3 {
     let size = map.width as i64;
     let relief = scale / 2.0;
-    let h = |i: i64, j: i64| {
-        map.rgba8[((j.rem_euclid(size) * size + i.rem_euclid(size)) * 4 + 3) as usize] as f32 / 255.0
-    };
+    let h =
+        |i: i64, j: i64| map.rgba8[((j.rem_euclid(size) * size + i.rem_euclid(size)) * 4 + 3) as usize] as f32 / 255.0;
     let texel_normal = |i: i64, j: i64| {
         let dhdu = (h(i + 1, j) - h(i - 1, j)) * size as f32 / 2.0;
         let dhdv = (h(i, j + 1) - h(i, j - 1)) * size as f32 / 2.0;
@@ -639,7 +638,8 @@ fn a_minified_stone_wall_shows_the_average_of_its_bumps_with_a_relief_that_keeps
     let (raster, _) = render(&context(), s.clone());
     let jittered = trace(&s, 256, true);
     assert_footprints_match(&s, &raster, &jittered, 0.03, "stone wall");
-    let paths = dvsgi::metrics::LinearImage { width: s.settings.width, height: s.settings.height, rgb: jittered.mean.clone() };
+    let paths =
+        dvsgi::metrics::LinearImage { width: s.settings.width, height: s.settings.height, rgb: jittered.mean.clone() };
     let against_paths = dvsgi::metrics::compare(&linear(&raster), &paths, 0.0, ToneMap::Aces).unwrap();
     let mut supersampled = s.clone();
     supersampled.settings.supersample = 4;
@@ -666,7 +666,12 @@ fn a_minified_stone_wall_shows_the_average_of_its_bumps_with_a_relief_that_keeps
     );
     assert!(against_paths.flip.mean <= 0.06, "FLIP {}", against_paths.flip.mean);
     assert!((r / p - 1.0).abs() <= 0.02, "mean {} of the paths'", r / p);
-    assert!((q / r - 1.0).abs() <= 0.01 && against_ss.flip.mean <= 0.05, "supersampling: {} {}", q / r, against_ss.flip.mean);
+    assert!(
+        (q / r - 1.0).abs() <= 0.01 && against_ss.flip.mean <= 0.05,
+        "supersampling: {} {}",
+        q / r,
+        against_ss.flip.mean
+    );
     assert!((p / f - 1.0).abs() <= 0.05, "the default relief changes the light by {}", p / f);
 }
 

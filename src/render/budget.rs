@@ -115,11 +115,8 @@ impl Estimate {
         let indices: u64 = scene.meshes.iter().map(|m| m.indices.len() as u64).sum();
         // A height map used with two reliefs is uploaded twice (render::relief).
         let uploads = super::relief::ReliefPlan::of(scene).uploads;
-        let texels: u64 = uploads
-            .iter()
-            .map(|u| &scene.textures[u.texture as usize])
-            .map(|t| t.width as u64 * t.height as u64)
-            .sum();
+        let texels: u64 =
+            uploads.iter().map(|u| &scene.textures[u.texture as usize]).map(|t| t.width as u64 * t.height as u64).sum();
         // position + normal + uv (32 B) per vertex, 4 B per index, RGBA8 textures with mips (4/3).
         e.scene = 32 * vertices + 4 * indices + texels * 16 / 3;
         e

@@ -3,6 +3,7 @@
 
 use super::graph::{Pass, QueueKind};
 use super::lights::GpuShadowView;
+use super::passes::exposure::ExposurePasses;
 use super::passes::gbuffer::{GBuffer, GBufferPass};
 use super::passes::gi_trace::{GiAddPass, GiPlaceholders, GiTargets, GiTracePass, GiUpsamplePass};
 use super::passes::lighting::{GiInputs, LightingInputs, LightingOutput, LightingPass};
@@ -12,7 +13,6 @@ use super::passes::resolve::ResolvePass;
 use super::passes::rsm::{RsmGatherPass, RsmMaps, RsmPass};
 use super::passes::rt_shadow::RtShadowPass;
 use super::passes::shadow::ShadowMaps;
-use super::passes::exposure::ExposurePasses;
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::upload::UploadPass;
 use super::passes::voxel_bounce::{BounceComposePass, VoxelBouncePass};

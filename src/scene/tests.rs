@@ -925,7 +925,10 @@ fn material_maps_load_by_kind() {
     assert_eq!(bump("").unwrap().materials[0].relief, Relief::Tile(1.0));
     assert_eq!(bump("bump_scale = 0.02\n").unwrap().materials[0].relief, Relief::Units(0.02));
     assert_eq!(bump("bump_relief = 3\n").unwrap().materials[0].relief, Relief::Tile(3.0));
-    assert_msg(&err_of(bump("bump_scale = 0.02\nbump_relief = 3\n")), &["s3.toml", "materials.0.bump_relief", "not both"]);
+    assert_msg(
+        &err_of(bump("bump_scale = 0.02\nbump_relief = 3\n")),
+        &["s3.toml", "materials.0.bump_relief", "not both"],
+    );
 }
 
 #[test]

@@ -42,8 +42,7 @@ impl ExposurePasses {
         let e = radiance.extent2d();
         let tiles = (e.width.div_ceil(TILE) * e.height.div_ceil(TILE)) as u64;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let partials =
-            Arc::new(Buffer::new(ctx, "exposure tiles", tiles * 8, storage, MemoryLocation::GpuOnly)?);
+        let partials = Arc::new(Buffer::new(ctx, "exposure tiles", tiles * 8, storage, MemoryLocation::GpuOnly)?);
         let state = Arc::new(Buffer::new(ctx, "exposure", 16, storage, MemoryLocation::GpuToCpu)?);
         state.write(0, &[0u8; 16]);
         let stage = |name: &'static str, resolve: bool| -> GpuResult<ExposurePass> {
