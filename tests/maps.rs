@@ -453,8 +453,7 @@ fn assert_direct_light_is_analytic(s: Scene, normal: impl Fn(f32, f32) -> Vec3, 
 
 /// The rasterized image as linear RGB.
 fn linear(out: &FrameOutput) -> dvsgi::metrics::LinearImage {
-    let rgb = out.radiance.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
-    dvsgi::metrics::LinearImage { width: out.width, height: out.height, rgb }
+    dvsgi::metrics::LinearImage { width: out.width, height: out.height, rgb: dvsgi::output::radiance_rgb(out) }
 }
 
 /// The rasterizer (supersample 1) against the path tracer jittered over each pixel, on the

@@ -349,11 +349,8 @@ fn automatic_exposure_runs_on_the_gpu_and_eases_in_the_window() {
     r.render(t, true).expect("frame");
     assert!(r.last_pass_names().iter().any(|p| p == "exposure"), "{:?}", r.last_pass_names());
     let out = r.output();
-    let linear = dvsgi::metrics::LinearImage {
-        width: out.width,
-        height: out.height,
-        rgb: out.radiance.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect(),
-    };
+    let linear =
+        dvsgi::metrics::LinearImage { width: out.width, height: out.height, rgb: dvsgi::output::radiance_rgb(&out) };
     let (gpu, host) = (r.auto_exposure().expect("an EV"), dvsgi::metrics::auto_exposure(&linear));
     println!("auto exposure: GPU {gpu} EV, host {host} EV");
     assert!((gpu - host).abs() < 1e-4, "GPU {gpu} against host {host}");

@@ -46,18 +46,15 @@ vec3 decode_tangent(vec4 texel) {
     return vec3(texel.xy * 2.0 - 1.0, 1.0 - texel.z);
 }
 
-// A height map's tangent vector with its slopes scaled by the material's `factor`
-// (GpuMaterial::emission.a, render::relief): a map is uploaded as the normal map of its
-// material's relief, so for a relief in texture space (HEIGHT_MAP) the factor is 1 and this
-// returns tn; for one in scene units (HEIGHT_MAP_UNITS) the slopes scale by the material's
-// mean scene units per unit of UV (the factor) over the surface's own. The length (the
-// normals' agreement) is kept: exact for a unit vector (a point, level 0), an approximation
-// of the scaled normals' mean where the ratio is not 1. A normal map's tn is as it is.
+// A map is uploaded as the normal map of its material's relief (render::relief), so a normal
+// map's and a texture-space relief's (HEIGHT_MAP) tangent vector is used as it is. A relief in
+// scene units (HEIGHT_MAP_UNITS) was made for the material's mean scene units per unit of UV
+// (`factor`, GpuMaterial::emission.a): its slopes scale by that over the surface's own. The
+// length (the normals' agreement) is kept: exact for a unit vector (a point, level 0), an
+// approximation of the scaled normals' mean where the ratio is not 1.
 vec3 scale_relief(vec3 tn, int kind, UvFrame f, float factor) {
-    float k = 1.0;
-    if (kind == HEIGHT_MAP) k = factor;
-    if (kind == HEIGHT_MAP_UNITS) k = f.ok ? factor / sqrt(max(length(cross(f.du, f.dv)), 1e-30)) : 1.0;
-    if (k == 1.0) return tn;
+    if (kind != HEIGHT_MAP_UNITS || !f.ok) return tn;
+    float k = factor / sqrt(max(length(cross(f.du, f.dv)), 1e-30));
     vec3 p = vec3(tn.xy * k, tn.z);
     float l = length(p);
     return l > 1e-30 ? p * (length(tn) / l) : tn;
@@ -107,7 +104,7 @@ vec4 bilinear_level0(texture2D t, sampler s, vec2 uv) {
 }
 
 // The shading normal n bent by map t (sampler s) of kind `kind` at the point uv, in the
-// surface's UV frame f; `factor` is the material's relief factor. Unit length.
+// surface's UV frame f; `factor` as `scale_relief` takes it. Unit length.
 vec3 mapped_normal(texture2D t, sampler s, int kind, vec3 n, UvFrame f, vec2 uv, float factor) {
     vec3 p = tangent_to_world(n, f, scale_relief(decode_tangent(bilinear_level0(t, s, uv)), kind, f, factor));
     return dot(p, p) > 1e-30 ? normalize(p) : n;

@@ -544,6 +544,26 @@ pub struct FramePasses {
     pub targets: Vec<Arc<Image>>,
 }
 
+/// The frame's 2D targets (`FramePasses::targets`): the G-buffer, then the shadow atlas,
+/// radiance, display and shown images (`outputs`; the shown one where it is not the radiance),
+/// the static casters' shadow cache and the ray-traced shadows' visibility where they exist.
+fn frame_targets(
+    gbuffer: &GBuffer,
+    outputs: [&Arc<Image>; 4],
+    shadow: Option<&ShadowMaps>,
+    rt_shadow: Option<&RtShadowPass>,
+) -> Vec<Arc<Image>> {
+    let [atlas, radiance, display, shown] = outputs;
+    [&gbuffer.depth, &gbuffer.albedo, &gbuffer.normal, &gbuffer.specular, &gbuffer.emission]
+        .into_iter()
+        .chain([atlas, radiance, display])
+        .chain(shadow.and_then(|s| s.cached.as_ref()).map(|c| &c.cache))
+        .chain((!Arc::ptr_eq(shown, radiance)).then_some(shown))
+        .chain(rt_shadow.map(|r| &r.visibility))
+        .cloned()
+        .collect()
+}
+
 /// What differs from frame to frame.
 #[derive(Debug, Clone, Copy)]
 pub struct FrameState {
@@ -627,22 +647,16 @@ impl FramePasses {
         let shading = Shading::new(ctx, scene, frame, voxels.as_ref(), lit)?;
         let shadow =
             (shadow_views > 0).then(|| ShadowMaps::new(ctx, scene_gpu, frame, &atlas, shadow_views)).transpose()?;
-        let shadow_cache = shadow.as_ref().and_then(|s| s.cached.as_ref()).map(|c| c.cache.clone());
         let exposure = ExposurePasses::new(ctx, frame, &shown)?;
+        let outputs = [&atlas, &radiance, &display, &shown];
+        let targets = frame_targets(&gbuffer, outputs, shadow.as_ref(), rt_shadow.as_ref());
         Ok(FramePasses {
             upload: frame_upload(frame, scene_gpu, rays.as_ref()),
             voxels,
             shadow,
             direct_shadow_maps: direct_shadow_maps(scene),
             gbuffer: GBufferPass::new(ctx, scene_gpu, frame, &gbuffer)?,
-            targets: [&gbuffer.depth, &gbuffer.albedo, &gbuffer.normal, &gbuffer.specular, &gbuffer.emission]
-                .into_iter()
-                .chain([&atlas, &radiance, &display])
-                .chain(shadow_cache.as_ref())
-                .chain((!Arc::ptr_eq(&shown, &radiance)).then_some(&shown))
-                .chain(rt_shadow.as_ref().map(|r| &r.visibility))
-                .cloned()
-                .collect(),
+            targets,
             rays,
             rt_shadow,
             cones,
