@@ -14,7 +14,7 @@ use std::sync::Arc;
 pub struct AccelerationStructure {
     ctx: Arc<Context>,
     pub raw: vk::AccelerationStructureKHR,
-    pub buffer: Buffer,
+    pub buffer: Arc<Buffer>,
     /// For instances that reference it.
     pub address: vk::DeviceAddress,
 }
@@ -33,7 +33,7 @@ impl AccelerationStructure {
                 &vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(raw),
             )
         };
-        Ok(AccelerationStructure { ctx: ctx.clone(), raw, buffer, address })
+        Ok(AccelerationStructure { ctx: ctx.clone(), raw, buffer: Arc::new(buffer), address })
     }
 }
 
@@ -189,7 +189,7 @@ fn scratch_alignment(ctx: &Context) -> u64 {
 
 /// Build scratch: a buffer with its device address rounded up to the device's alignment.
 pub struct Scratch {
-    pub buffer: Buffer,
+    pub buffer: Arc<Buffer>,
     pub address: vk::DeviceAddress,
 }
 
@@ -199,7 +199,7 @@ impl Scratch {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
         let buffer = Buffer::new(ctx, name, size + align, usage, MemoryLocation::GpuOnly)?;
         let address = buffer_address(ctx, &buffer).next_multiple_of(align);
-        Ok(Scratch { buffer, address })
+        Ok(Scratch { buffer: Arc::new(buffer), address })
     }
 }
 

@@ -10,8 +10,9 @@
 
 pub mod bvh;
 
-use crate::gpu::{shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuResult, Image, ImageDesc, Pipeline};
-use crate::render::graph::{Pass, Use};
+use crate::gpu::{shaders, Access, Bind, Buffer, Context, GpuResult, Image, ImageDesc, Pipeline};
+use crate::render::binding::{Binds, PassSet};
+use crate::render::graph::Pass;
 use crate::render::passes::readback::{HostReadPass, ImageDownload};
 use crate::render::scene_gpu::{upload_buffer, MaterialTable};
 use crate::render::{lights, Mode, Scheduler};
@@ -199,11 +200,10 @@ impl Triangles {
 
 /// The one compute pass: trace `samples` paths per pixel into the accumulators.
 struct TracePass {
-    buffers: Vec<Arc<Buffer>>,
     accum: Arc<Image>,
     accum_sq: Arc<Image>,
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
     size: [u32; 2],
     /// The sample index the next recorded dispatch traces.
     next_sample: Cell<u32>,
@@ -213,20 +213,15 @@ impl Pass for TracePass {
     fn name(&self) -> &str {
         "path trace"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let mut uses = vec![
-            Use::image(&self.accum, Access::ComputeShaderWrite),
-            Use::image(&self.accum_sq, Access::ComputeShaderWrite),
-        ];
-        uses.extend(self.buffers.iter().map(|b| Use::buffer(b, Access::ComputeShaderReadBuffer)));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.set]
     }
     /// One sample per pixel per dispatch: llvmpipe caps the iterations a loop may run in
     /// one invocation (gallivm's loop limiter), so tracing many samples in one invocation
     /// silently cut long paths short (a furnace test lost 0.5% of its energy).
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
         let sample = self.next_sample.get();
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         self.pipeline.push(cmd, &[sample, 1u32]);
         self.pipeline.dispatch(cmd, [self.size[0], self.size[1], 1], [8, 8, 1]);
         self.next_sample.set(sample + 1);
@@ -245,41 +240,29 @@ impl TracePass {
     ) -> GpuResult<TracePass> {
         let accum = accumulator(ctx, "reference sum", size)?;
         let accum_sq = accumulator(ctx, "reference sum of squares", size)?;
-        let [material_bind, texture_bind] = materials.binds();
-        let set = DescriptorSet::new(
-            ctx,
-            "path trace",
-            vk::ShaderStageFlags::COMPUTE,
-            &[
-                Bind::Uniform(&uniform),
-                Bind::Storage(&scene.nodes),
-                Bind::Storage(&scene.tris),
-                Bind::Storage(&scene.shades),
-                material_bind,
-                Bind::Storage(&scene.lights),
-                texture_bind,
-                Bind::StorageImage(accum.view),
-                Bind::StorageImage(accum_sq.view),
-                materials.lod_sampler_bind(),
-            ],
-        )?;
+        let [read, write] = [Access::ComputeShaderReadBuffer, Access::ComputeShaderWrite];
+        let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        let set = Binds::new()
+            .uniform(&uniform, read)
+            .storage(&scene.nodes, read)
+            .storage(&scene.tris, read)
+            .storage(&scene.shades, read)
+            .loaded(Bind::Storage(&materials.buffer))
+            .storage(&scene.lights, read)
+            .loaded(Bind::ImageArray(materials.texture_views(), ro))
+            .storage_image(&accum, write)
+            .storage_image(&accum_sq, write)
+            .sampler(materials.lod_sampler.raw)
+            .build(ctx, "path trace", vk::ShaderStageFlags::COMPUTE)?;
         let pipeline = Pipeline::compute(
             ctx,
             "path trace",
             shaders::PT_TRACE_COMP,
-            &[set.layout],
+            &[set.layout()],
             8,
             &[(0, materials.texture_count())],
         )?;
-        Ok(TracePass {
-            buffers: vec![uniform, scene.nodes, scene.tris, scene.shades, scene.lights],
-            accum,
-            accum_sq,
-            pipeline,
-            set,
-            size,
-            next_sample: Cell::new(0),
-        })
+        Ok(TracePass { accum, accum_sq, pipeline, set, size, next_sample: Cell::new(0) })
     }
 }
 

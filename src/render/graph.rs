@@ -1,6 +1,7 @@
 //! Passes declare what they read and write; the recorder derives every barrier from those
 //! declarations (see `gpu::sync`) and wraps each pass in a debug label and GPU timestamps.
 
+use super::binding::PassSet;
 use crate::gpu::sync::{access_mask, barrier_from, layout_of, stage_mask, write_mask, writes, Access, Barrier};
 use crate::gpu::{Buffer, Context, Image};
 use ash::vk;
@@ -55,9 +56,16 @@ impl<'a> Use<'a> {
 /// A unit of GPU work in the frame.
 pub trait Pass {
     fn name(&self) -> &str;
-    /// Everything this pass reads or writes that another pass may also touch.
-    /// (Immutable scene data uploaded at load time is not listed.)
-    fn uses(&self) -> Vec<Use<'_>>;
+    /// The descriptor sets the pass binds: what they hold, with its access, is what its shaders
+    /// read and write (see `render::binding`).
+    fn sets(&self) -> Vec<&PassSet> {
+        Vec::new()
+    }
+    /// What the pass touches outside its sets, that another pass may also touch: attachments,
+    /// copies, indirect arguments, host reads. Never again an access one of its sets declares.
+    fn unbound(&self) -> Vec<Use<'_>> {
+        Vec::new()
+    }
     /// The queue this work belongs to in the async modes (graphics unless overridden).
     fn queue(&self) -> QueueKind {
         QueueKind::Graphics
@@ -68,6 +76,20 @@ pub trait Pass {
     fn semaphores(&self) -> BinarySemaphores {
         BinarySemaphores::default()
     }
+}
+
+/// Everything `pass` reads or writes that another pass may also touch: what its sets hold,
+/// then its unbound uses. (Data written once at load time is bound untracked.)
+pub fn uses(pass: &dyn Pass) -> Vec<Use<'_>> {
+    let mut uses: Vec<Use> = pass.sets().into_iter().flat_map(PassSet::uses).collect();
+    let bound = uses.len();
+    uses.extend(pass.unbound());
+    debug_assert!(
+        uses[bound..].iter().all(|u| uses[..bound].iter().all(|b| (b.res.key(), b.access) != (u.res.key(), u.access))),
+        "{}: an access its sets declare is declared again as an unbound use",
+        pass.name()
+    );
+    uses
 }
 
 /// What [`Pass::semaphores`] asks of its submit: wait for `wait` before the stages it names,

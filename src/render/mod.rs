@@ -1,6 +1,7 @@
 //! The renderer: scene upload, per-frame data, and frame submission. What a frame runs is in
 //! [`frame`]; how barriers are derived is in [`graph`].
 
+pub mod binding;
 pub mod bricks;
 pub mod budget;
 pub mod cones;
@@ -18,13 +19,13 @@ pub mod schedule;
 pub mod texture;
 pub mod voxel;
 
-use crate::gpu::{Access, Buffer, Context, GpuError, GpuResult};
+use crate::gpu::{Buffer, Context, GpuError, GpuResult};
 use crate::scene::{Motion, Scene, ToneMap};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use frame::{FramePasses, FrameState};
 use gpu_allocator::MemoryLocation;
-use graph::{Pass, Use};
+use graph::Pass;
 use scene_gpu::SceneGpu;
 pub use schedule::{FrameTiming, HostWaits, Mode, PassTime, Scheduler, SerialTime, SubmitRecord};
 use std::sync::Arc;
@@ -58,17 +59,6 @@ pub struct FrameBuffers {
     pub uniforms: Arc<Buffer>,
     pub lights: Arc<Buffer>,
     pub shadow_views: Arc<Buffer>,
-}
-
-impl FrameBuffers {
-    /// The declared reads of the per-frame data by a pass's shaders.
-    pub fn reads(&self, access: Access) -> Vec<Use<'_>> {
-        vec![
-            Use::buffer(&self.uniforms, access),
-            Use::buffer(&self.lights, access),
-            Use::buffer(&self.shadow_views, access),
-        ]
-    }
 }
 
 /// The rendered frame read back to the host.

@@ -8,6 +8,7 @@
 //! invocations over covered pixels is the overdraw.
 
 use crate::gpu::{Context, GpuResult, VkContext};
+use crate::render::binding::PassSet;
 use crate::render::graph::{Pass, QueueKind, Use};
 use ash::vk;
 
@@ -52,8 +53,11 @@ impl Pass for Counted<'_> {
     fn name(&self) -> &str {
         self.pass.name()
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        self.pass.uses()
+    fn sets(&self) -> Vec<&PassSet> {
+        self.pass.sets()
+    }
+    fn unbound(&self) -> Vec<Use<'_>> {
+        self.pass.unbound()
     }
     fn queue(&self) -> QueueKind {
         self.pass.queue()

@@ -9,9 +9,8 @@ use super::scene_gpu::SceneGpu;
 use super::voxel::VoxelVolumes;
 use super::FrameBuffers;
 use crate::gpu::accel::{self, AccelerationStructure, TopLevel, TriangleMesh, TriangleSource};
-use crate::gpu::{
-    shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuError, GpuResult, Image, ImageDesc, Pipeline, Sampler,
-};
+use crate::gpu::{shaders, Access, Bind, Buffer, Context, GpuError, GpuResult, Image, ImageDesc, Pipeline, Sampler};
+use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, QueueKind, Use};
 use crate::scene::{HitIndirect, Scene};
 use ash::vk;
@@ -112,29 +111,18 @@ impl SceneRays {
     }
 
     /// The bindings a ray-query shader declares in a row (glsl/include/ray_query.glsl): the top
-    /// level, the vertices, indices, draw table and instances, the materials, the textures and
-    /// their explicit-level sampler.
-    pub fn binds<'a>(&'a self, scene: &'a SceneGpu) -> [Bind<'a>; 8] {
-        let [materials, textures] = scene.materials.binds();
-        [
-            Bind::AccelerationStructure(self.top.structure.raw),
-            Bind::Storage(&scene.vertices),
-            Bind::Storage(&scene.indices),
-            Bind::Storage(&self.draws),
-            Bind::Storage(&scene.instances),
-            materials,
-            textures,
-            scene.materials.lod_sampler_bind(),
-        ]
-    }
-
-    /// What a ray-query pass reads that changes from frame to frame: the top level (rebuilt
-    /// when objects move) and the instances (their hits' transforms).
-    pub fn reads<'a>(&'a self, scene: &'a SceneGpu) -> [Use<'a>; 2] {
-        [
-            Use::buffer(&self.top.structure.buffer, Access::ComputeShaderReadAccelerationStructure),
-            Use::buffer(&scene.instances, Access::ComputeShaderReadBuffer),
-        ]
+    /// level (rebuilt when objects move), the vertices, indices, draw table and instances (their
+    /// hits' transforms, uploaded every frame), the materials, the textures and their
+    /// explicit-level sampler.
+    pub fn binds<'a>(&'a self, scene: &'a SceneGpu) -> Binds<'a> {
+        Binds::new()
+            .acceleration_structure(self.top.structure.raw, &self.top.structure.buffer)
+            .loaded(Bind::Storage(&scene.vertices))
+            .loaded(Bind::Storage(&scene.indices))
+            .loaded(Bind::Storage(&self.draws))
+            .storage(&scene.instances, Access::ComputeShaderReadBuffer)
+            .extend(scene.materials.binds())
+            .sampler(scene.materials.lod_sampler.raw)
     }
 
     /// Uploads the instances and builds the top level at load time.
@@ -169,7 +157,7 @@ impl Pass for TopLevelBuildPass {
     fn name(&self) -> &str {
         "top-level build"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
+    fn unbound(&self) -> Vec<Use<'_>> {
         let top = &self.rays.top;
         vec![
             Use::buffer(&top.instances, Access::AccelerationStructureBuildInput),
@@ -187,17 +175,9 @@ impl Pass for TopLevelBuildPass {
 
 /// Traces the reflections of glossy and mirror pixels into the specular target (1/k).
 pub struct RtReflectPass {
-    frame: FrameBuffers,
-    gbuffer: Arc<GBuffer>,
-    volumes: Arc<VoxelVolumes>,
-    lod0: Arc<Image>,
-    rays: Arc<SceneRays>,
-    scene: Arc<SceneGpu>,
     pub target: Arc<Image>,
-    /// The reflections averaged over the frames the view and the scene stood still.
-    history: Arc<Image>,
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
     _sampler: Sampler,
 }
 
@@ -222,31 +202,20 @@ impl RtReflectPass {
         let desc = ImageDesc::d2(vk::Format::R32G32B32A32_SFLOAT, e.width, e.height, usage);
         let history = Arc::new(Image::new(ctx, "rt reflection history", desc)?);
         let images = RtImages { target, history: &history, lod0: &lod0 };
-        let set = DescriptorSet::new(
+        let set = Self::binds(frame, gbuffer, volumes, scene, rays, images, &sampler).build(
             ctx,
             "rt reflections",
             vk::ShaderStageFlags::COMPUTE,
-            &Self::binds(frame, gbuffer, volumes, scene, rays, images, &sampler),
         )?;
         let cones = u32::from(hit == HitIndirect::Cones);
         let spec = [(0, scene.materials.texture_count()), (1, specular_rays), (2, cones)];
-        let pipeline = Pipeline::compute(ctx, "rt reflections", shaders::RT_REFLECT_COMP, &[set.layout], 0, &spec)?;
-        Ok(RtReflectPass {
-            frame: frame.clone(),
-            gbuffer: gbuffer.clone(),
-            volumes: volumes.clone(),
-            lod0,
-            rays: rays.clone(),
-            scene: scene.clone(),
-            target: target.clone(),
-            history,
-            pipeline,
-            set,
-            _sampler: sampler,
-        })
+        let pipeline = Pipeline::compute(ctx, "rt reflections", shaders::RT_REFLECT_COMP, &[set.layout()], 0, &spec)?;
+        Ok(RtReflectPass { target: target.clone(), pipeline, set, _sampler: sampler })
     }
 
-    /// The bindings of glsl/rt_reflect.comp, in order.
+    /// The bindings of glsl/rt_reflect.comp, in order: the G-buffer, the voxels (for the light
+    /// at the hits), the target, the scene's rays, then the direct radiance the hits read and
+    /// the history (the reflections averaged over the frames the view and the scene stood still).
     #[allow(clippy::too_many_arguments)]
     fn binds<'a>(
         frame: &'a FrameBuffers,
@@ -256,65 +225,50 @@ impl RtReflectPass {
         rays: &'a SceneRays,
         images: RtImages<'a>,
         sampler: &'a Sampler,
-    ) -> Vec<Bind<'a>> {
+    ) -> Binds<'a> {
         let RtImages { target, history, lod0 } = images;
-        let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        let [pool_images, pool_sampler] = v.pool_binds();
-        [
-            Bind::Uniform(&frame.uniforms),
-            Bind::Storage(&frame.lights),
-            Bind::Uniform(&v.grid_buffer),
-            Bind::Uniform(&v.gi_params),
-            Bind::Sampled(gbuffer.depth.view, sampler.raw, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL),
-            Bind::Sampled(gbuffer.albedo.view, sampler.raw, ro),
-            Bind::Sampled(gbuffer.normal.view, sampler.raw, ro),
-            Bind::Sampled(gbuffer.specular.view, sampler.raw, ro),
-            Bind::Sampled(lod0.view, v.sampler.raw, ro),
-            Bind::SampledArray(v.directional.iter().map(|d| d.view).collect(), v.sampler.raw, ro),
-            v.brick_maps_bind(),
-            pool_images,
-            pool_sampler,
-            Bind::StorageImage(target.view),
-        ]
-        .into_iter()
-        .chain(rays.binds(scene))
-        .chain([Bind::Sampled(v.radiance.view, v.sampler.raw, ro), Bind::StorageImage(history.view)])
-        .collect()
+        let (buffer, read) = (Access::ComputeShaderReadBuffer, Access::ComputeShaderReadSampled);
+        let write = Access::ComputeShaderWrite;
+        Binds::new()
+            .uniform(&frame.uniforms, buffer)
+            .storage(&frame.lights, buffer)
+            .loaded(Bind::Uniform(&v.grid_buffer))
+            .loaded(Bind::Uniform(&v.gi_params))
+            .sampled(&gbuffer.depth, sampler.raw, Access::ComputeShaderReadDepth)
+            .sampled(&gbuffer.albedo, sampler.raw, read)
+            .sampled(&gbuffer.normal, sampler.raw, read)
+            .sampled(&gbuffer.specular, sampler.raw, read)
+            .extend(v.cone_volumes(lod0))
+            .extend(v.brick_maps(Access::ComputeShaderReadStorage))
+            .extend(v.pools())
+            .storage_image(target, write)
+            .overwritten()
+            .extend(rays.binds(scene))
+            .sampled(&v.radiance, v.sampler.raw, read)
+            .storage_image(history, write)
     }
 }
 
 /// The images the reflections write (the specular target and the history) and the radiance
 /// volume whose level 0 the hits read.
 struct RtImages<'a> {
-    target: &'a Image,
-    history: &'a Image,
-    lod0: &'a Image,
+    target: &'a Arc<Image>,
+    history: &'a Arc<Image>,
+    lod0: &'a Arc<Image>,
 }
 
 impl Pass for RtReflectPass {
     fn name(&self) -> &str {
         "rt reflections"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let read = Access::ComputeShaderReadSampled;
-        let mut uses = self.gbuffer.surface_reads().to_vec();
-        uses.push(Use::image(&self.gbuffer.albedo, read));
-        uses.push(Use::image(&self.gbuffer.specular, read));
-        uses.extend(self.volumes.cone_reads(&self.lod0));
-        if !Arc::ptr_eq(&self.lod0, &self.volumes.radiance) {
-            uses.push(Use::image(&self.volumes.radiance, read));
-        }
-        uses.push(Use::overwrite(&self.target, Access::ComputeShaderWrite));
-        uses.push(Use::image(&self.history, Access::ComputeShaderWrite));
-        uses.extend(self.rays.reads(&self.scene));
-        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.set]
     }
     fn queue(&self) -> QueueKind {
         QueueKind::Compute
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         self.pipeline.dispatch_pixels(cmd, &self.target);
     }
 }

@@ -4,7 +4,7 @@
 
 use crate::gpu::sync::{barrier, Access};
 use crate::gpu::{Bind, Buffer, Context, GpuResult, Image, ImageDesc, Sampler};
-use crate::render::graph::Use;
+use crate::render::binding::Binds;
 use crate::render::relief::ReliefPlan;
 use crate::scene::{Material, Relief, Scene, Texture, TextureUse};
 use ash::vk;
@@ -170,19 +170,11 @@ impl MaterialTable {
     }
 
     /// Two bindings a shading shader declares in a row: the material table, then the textures
-    /// (sampled images). It declares their sampler, [`Self::sampler_bind`], as its last binding.
-    pub fn binds(&self) -> [Bind<'_>; 2] {
-        [Bind::Storage(&self.buffer), Bind::ImageArray(self.texture_views(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]
-    }
-
-    /// The textures' sampler (`texture_sampler` in glsl/include/material.glsl).
-    pub fn sampler_bind(&self) -> Bind<'_> {
-        Bind::Sampler(self.sampler.raw)
-    }
-
-    /// The sampler for shaders that only sample explicit levels (the path tracer).
-    pub fn lod_sampler_bind(&self) -> Bind<'_> {
-        Bind::Sampler(self.lod_sampler.raw)
+    /// (sampled images), both written at load time. It declares their sampler,
+    /// [`Self::sampler`], as its last binding.
+    pub fn binds(&self) -> Binds<'_> {
+        let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        Binds::new().loaded(Bind::Storage(&self.buffer)).loaded(Bind::ImageArray(self.texture_views(), ro))
     }
 }
 
@@ -448,11 +440,6 @@ impl SceneGpu {
             instances,
             draws,
         })
-    }
-
-    /// The declared read of the instance table by the graphics passes that draw the scene.
-    pub fn instance_reads(&self) -> Use<'_> {
-        Use::buffer(&self.instances, Access::GraphicsShaderReadBuffer)
     }
 
     /// The instance table for time `t` (uploaded by the frame's upload pass).

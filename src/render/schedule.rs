@@ -398,7 +398,7 @@ impl Scheduler {
     }
 
     fn record_pass(&mut self, pass: &dyn Pass, q: QueueKind) -> GpuResult<()> {
-        let uses = pass.uses();
+        let uses = super::graph::uses(pass);
         let mut t: Transition = self.tracker.plan(&uses, q);
         let (qi, oi) = (q.index(), q.other().index());
         let mut wait = t.wait;

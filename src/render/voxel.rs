@@ -2,10 +2,10 @@
 //! given, otherwise the world bounds at the scene time grown by 5% (so surfaces on the scene's
 //! boundary are not on the grid's faces). Volumes are created only when the scene needs them.
 
-use crate::gpu::{Access, Bind, Buffer, Context, GpuError, GpuResult, Image, ImageDesc, Sampler};
+use crate::gpu::{Access, Buffer, Context, GpuError, GpuResult, Image, ImageDesc, Sampler};
+use crate::render::binding::Binds;
 use crate::render::bricks::{BrickLayout, Bricks, FullImages, BRICK, MAX_POOLS};
 use crate::render::cones::GpuGiParams;
-use crate::render::graph::Use;
 use crate::scene::{Aabb, GiMode, GiSettings, Scene, View, VoxelLayout};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -434,52 +434,27 @@ impl VoxelVolumes {
         })
     }
 
-    /// The brick maps (`brick_maps[4]` in bricks.glsl), placeholders where there are none.
-    pub fn brick_maps_bind(&self) -> Bind<'_> {
+    /// The brick maps (`brick_maps[4]` in bricks.glsl), placeholders where there are none,
+    /// touched with `access`. (Every pass that finds voxels in the bricked volumes binds them.)
+    pub fn brick_maps(&self, access: Access) -> Binds<'_> {
         let maps = self.bricks.as_ref().map_or(&[][..], |b| &b.maps[..]);
-        Bind::StorageImageArray((0..MAX_POOLS).map(|i| maps.get(i).unwrap_or(&self.map_placeholder).view).collect())
-    }
-
-    /// Uses of the bound brick maps (each once) with `access`.
-    pub fn brick_map_uses(&self, access: Access) -> Vec<Use<'_>> {
-        let maps = self.bricks.as_ref().map_or(&[][..], |b| &b.maps[..]);
-        let mut uses: Vec<Use> = maps.iter().map(|m| Use::image(m, access)).collect();
-        if maps.len() < MAX_POOLS {
-            uses.push(Use::image(&self.map_placeholder, access));
-        }
-        uses
+        let bound = (0..MAX_POOLS).map(|i| maps.get(i).unwrap_or(&self.map_placeholder));
+        Binds::new().storage_images(bound, access)
     }
 
     /// The pooled directional levels (`aniso_pool[18]` and `pool_sampler` in cone.glsl),
-    /// placeholders where there are none.
-    pub fn pool_binds(&self) -> [Bind<'_>; 2] {
+    /// placeholders where there are none, sampled in compute shaders.
+    pub fn pools(&self) -> Binds<'_> {
         let pooled = self.bricks.as_ref().map_or(&[][..], |b| &b.directional[..]);
-        let views = (0..3 * 6)
-            .map(|i| pooled.get(i / 6).map_or(self.pool_placeholder.view, |level| level[i % 6].view))
-            .collect();
-        [Bind::ImageArray(views, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL), Bind::Sampler(self.sampler.raw)]
+        let bound = (0..3 * 6).map(|i| pooled.get(i / 6).map_or(&self.pool_placeholder, |level| &level[i % 6]));
+        Binds::new().images(bound, Access::ComputeShaderReadSampled).sampler(self.sampler.raw)
     }
 
-    /// What cone.glsl reads in a compute shader: the full-resolution radiance `lod0`, the
-    /// directional volumes, their pooled levels and the brick maps.
-    pub fn cone_reads<'a>(&'a self, lod0: &'a Image) -> Vec<Use<'a>> {
+    /// The volumes cone.glsl samples in a compute shader beside its pools and brick maps: the
+    /// full-resolution radiance `lod0` and the directional volumes.
+    pub fn cone_volumes<'a>(&'a self, lod0: &'a Arc<Image>) -> Binds<'a> {
         let read = Access::ComputeShaderReadSampled;
-        let mut uses = vec![Use::image(lod0, read)];
-        uses.extend(self.directional.iter().map(|d| Use::image(d, read)));
-        uses.extend(self.pool_uses());
-        uses.extend(self.brick_map_uses(Access::ComputeShaderReadStorage));
-        uses
-    }
-
-    /// Uses of the bound pooled levels (sampled in compute shaders).
-    pub fn pool_uses(&self) -> Vec<Use<'_>> {
-        let pooled = self.bricks.as_ref().map_or(&[][..], |b| &b.directional[..]);
-        let mut uses: Vec<Use> =
-            pooled.iter().flatten().map(|i| Use::image(i, Access::ComputeShaderReadSampled)).collect();
-        if pooled.len() < 3 {
-            uses.push(Use::image(&self.pool_placeholder, Access::ComputeShaderReadSampled));
-        }
-        uses
+        Binds::new().sampled(lod0, self.sampler.raw, read).sampled_array(&self.directional, self.sampler.raw, read)
     }
 
     /// Every volume that exists, for clears and memory reports: with bricks their maps and
@@ -509,33 +484,11 @@ impl VoxelVolumes {
         self.bounced.first().unwrap_or(&self.radiance)
     }
 
-    /// Uses of the voxelization's sums by a pass that adds to them with `access`, keeping
-    /// their contents, plus the flag volume (or its placeholder) with `flags`.
-    pub fn uses(&self, access: Access, flags: Access) -> Vec<Use<'_>> {
-        let mut uses = self.sums_uses(access);
-        uses.push(Use::image(self.flags_or_placeholder(), flags));
-        uses
-    }
-
-    /// The sums (`vox_sums[SUM_WORDS]` in voxel.glsl): the emission's are the map
-    /// placeholder where there is no emission (never written).
-    pub fn sums_bind(&self) -> Bind<'_> {
-        let view = |w: usize| self.sums.get(w).unwrap_or(&self.map_placeholder).view;
-        Bind::StorageImageArray((0..sum_words(true)).map(view).collect())
-    }
-
-    /// Uses of the bound sums (the placeholder once, where it stands in) with `access`.
-    pub fn sums_uses(&self, access: Access) -> Vec<Use<'_>> {
-        let mut uses: Vec<Use> = self.sums.iter().map(|s| Use::image(s, access)).collect();
-        if self.sums.len() < sum_words(true) {
-            uses.push(Use::image(&self.map_placeholder, access));
-        }
-        uses
-    }
-
-    /// Grid uniform, flags (or placeholder): the voxelizer's bindings of the volumes it reads.
-    pub fn binds(&self) -> [Bind<'_>; 2] {
-        [Bind::Uniform(&self.grid_buffer), Bind::StorageImage(self.flags_or_placeholder().view)]
+    /// The sums (`vox_sums[SUM_WORDS]` in voxel.glsl), touched with `access`: the emission's
+    /// are the map placeholder where there is no emission (never written).
+    pub fn sums_bound(&self, access: Access) -> Binds<'_> {
+        let bound = (0..sum_words(true)).map(|w| self.sums.get(w).unwrap_or(&self.map_placeholder));
+        Binds::new().storage_images(bound, access)
     }
 
     /// The volume bound where the emission volume goes (albedo stands in, never written).

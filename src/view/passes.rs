@@ -21,7 +21,7 @@ impl Pass for CopyPass {
     fn name(&self) -> &str {
         "view copy"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
+    fn unbound(&self) -> Vec<Use<'_>> {
         vec![Use::image(&self.display, Access::TransferRead), Use::overwrite(&self.view, Access::TransferWrite)]
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
@@ -69,7 +69,7 @@ impl Pass for UiPass<'_> {
     fn name(&self) -> &str {
         "ui"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
+    fn unbound(&self) -> Vec<Use<'_>> {
         vec![
             Use::image(&self.view, Access::FragmentShaderReadSampled),
             Use::overwrite(&self.target, Access::ColorAttachmentWrite),
@@ -112,7 +112,7 @@ impl Pass for PresentPass {
     fn name(&self) -> &str {
         "present"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
+    fn unbound(&self) -> Vec<Use<'_>> {
         vec![Use::image(&self.target, Access::Present)]
     }
     fn semaphores(&self) -> BinarySemaphores {

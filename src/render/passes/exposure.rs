@@ -5,8 +5,9 @@
 //! ([`ExposurePasses::chosen`]); it keeps the shown EV from frame to frame for the viewer's
 //! easing.
 
-use crate::gpu::{shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuResult, Image, Pipeline};
-use crate::render::graph::{Pass, Use};
+use crate::gpu::{shaders, Access, Bind, Buffer, Context, GpuResult, Image, Pipeline};
+use crate::render::binding::{Binds, PassSet};
+use crate::render::graph::Pass;
 use crate::render::FrameBuffers;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -21,12 +22,10 @@ const GROUP: u32 = 64;
 pub struct ExposurePass {
     name: &'static str,
     resolve: bool,
-    frame: FrameBuffers,
+    /// Its extent gives the dispatch's size.
     radiance: Arc<Image>,
-    partials: Arc<Buffer>,
-    state: Arc<Buffer>,
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
 }
 
 /// The two stages and the buffer they leave the EV in.
@@ -46,29 +45,20 @@ impl ExposurePasses {
         let state = Arc::new(Buffer::new(ctx, "exposure", 16, storage, MemoryLocation::GpuToCpu)?);
         state.write(0, &[0u8; 16]);
         let stage = |name: &'static str, resolve: bool| -> GpuResult<ExposurePass> {
-            let set = DescriptorSet::new(
-                ctx,
-                name,
-                vk::ShaderStageFlags::COMPUTE,
-                &[
-                    Bind::Uniform(&frame.uniforms),
-                    Bind::StorageImage(radiance.view),
-                    Bind::Storage(&partials),
-                    Bind::Storage(&state),
-                ],
-            )?;
+            // The tiles read the radiance into the partial sums; the resolve reduces those
+            // into the state. Each leaves the other's binding idle.
+            let (buffer, write) = (Access::ComputeShaderReadBuffer, Access::ComputeShaderWrite);
+            let binds = Binds::new().uniform(&frame.uniforms, buffer);
+            let set = if resolve {
+                binds.idle(Bind::StorageImage(radiance.view)).storage(&partials, buffer).storage(&state, write)
+            } else {
+                let read = Access::ComputeShaderReadStorage;
+                binds.storage_image(radiance, read).storage(&partials, write).idle(Bind::Storage(&state))
+            }
+            .build(ctx, name, vk::ShaderStageFlags::COMPUTE)?;
             let spec = [(0, u32::from(resolve))];
-            let pipeline = Pipeline::compute(ctx, name, shaders::EXPOSURE_COMP, &[set.layout], 0, &spec)?;
-            Ok(ExposurePass {
-                name,
-                resolve,
-                frame: frame.clone(),
-                radiance: radiance.clone(),
-                partials: partials.clone(),
-                state: state.clone(),
-                pipeline,
-                set,
-            })
+            let pipeline = Pipeline::compute(ctx, name, shaders::EXPOSURE_COMP, &[set.layout()], 0, &spec)?;
+            Ok(ExposurePass { name, resolve, radiance: radiance.clone(), pipeline, set })
         };
         Ok(ExposurePasses {
             tiles: stage("exposure (tiles)", false)?,
@@ -90,23 +80,11 @@ impl Pass for ExposurePass {
     fn name(&self) -> &str {
         self.name
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let mut uses = if self.resolve {
-            vec![
-                Use::buffer(&self.partials, Access::ComputeShaderReadBuffer),
-                Use::buffer(&self.state, Access::ComputeShaderWrite),
-            ]
-        } else {
-            vec![
-                Use::image(&self.radiance, Access::ComputeShaderReadStorage),
-                Use::buffer(&self.partials, Access::ComputeShaderWrite),
-            ]
-        };
-        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.set]
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         let e = self.radiance.extent2d();
         let tiles = e.width.div_ceil(TILE) * e.height.div_ceil(TILE);
         let groups = if self.resolve { 1 } else { tiles };

@@ -1,8 +1,7 @@
 //! G-buffer by dynamic rendering: depth, linear albedo, normal + shininess, specular, emission.
 
-use crate::gpu::{
-    shaders, Access, Bind, Context, DescriptorSet, GpuResult, GraphicsDesc, Image, ImageDesc, Pipeline, Sampler,
-};
+use crate::gpu::{shaders, Access, Context, GpuResult, GraphicsDesc, Image, ImageDesc, Pipeline, Sampler};
+use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, Use};
 use crate::render::scene_gpu::SceneGpu;
 use crate::render::FrameBuffers;
@@ -59,12 +58,14 @@ impl GBuffer {
                 .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE),
         )
     }
-    /// The depth and normal that a per-pixel compute pass reads to place its pixel's surface.
-    pub fn surface_reads(&self) -> [Use<'_>; 2] {
-        [
-            Use::image(&self.depth, Access::ComputeShaderReadDepth),
-            Use::image(&self.normal, Access::ComputeShaderReadSampled),
-        ]
+    /// The depth and normal that a per-pixel compute pass reads to place its pixel's surface
+    /// (two bindings, point-sampled with `sampler`).
+    pub fn surface(&self, sampler: vk::Sampler) -> Binds<'_> {
+        Binds::new().sampled(&self.depth, sampler, Access::ComputeShaderReadDepth).sampled(
+            &self.normal,
+            sampler,
+            Access::ComputeShaderReadSampled,
+        )
     }
 
     pub fn colors(&self) -> [&Arc<Image>; 4] {
@@ -95,7 +96,7 @@ pub struct GBufferPass {
     pipeline: Pipeline,
     /// `OverPrepass`: the masked draws' pipeline (depth written).
     masked: Option<Pipeline>,
-    set: DescriptorSet,
+    set: PassSet,
 }
 
 const COLOR_FORMATS: [vk::Format; 4] = [ALBEDO_FORMAT, NORMAL_FORMAT, SPECULAR_FORMAT, EMISSION_FORMAT];
@@ -104,7 +105,7 @@ const COLOR_FORMATS: [vk::Format; 4] = [ALBEDO_FORMAT, NORMAL_FORMAT, SPECULAR_F
 fn pipeline(
     ctx: &Arc<Context>,
     scene: &SceneGpu,
-    set: &DescriptorSet,
+    set: &PassSet,
     colors: bool,
     depth_write: bool,
 ) -> GpuResult<Pipeline> {
@@ -126,7 +127,7 @@ fn pipeline(
             conservative: false,
             spec: &[(0, scene.materials.texture_count())],
         },
-        &[set.layout],
+        &[set.layout()],
         0,
     )
 }
@@ -149,19 +150,13 @@ impl GBufferPass {
         gbuffer: &Arc<GBuffer>,
         variant: GBufferVariant,
     ) -> GpuResult<Self> {
-        let [materials, textures] = scene.materials.binds();
-        let set = DescriptorSet::new(
-            ctx,
-            "gbuffer",
-            vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
-            &[
-                Bind::Uniform(&frame.uniforms),
-                Bind::Storage(&scene.instances),
-                materials,
-                textures,
-                scene.materials.sampler_bind(),
-            ],
-        )?;
+        let buffer = Access::GraphicsShaderReadBuffer;
+        let set = Binds::new()
+            .uniform(&frame.uniforms, buffer)
+            .storage(&scene.instances, buffer)
+            .extend(scene.materials.binds())
+            .sampler(scene.materials.sampler.raw)
+            .build(ctx, "gbuffer", vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)?;
         let (pipeline, masked) = match variant {
             GBufferVariant::Full => (pipeline(ctx, scene, &set, true, true)?, None),
             GBufferVariant::DepthPrepass => (pipeline(ctx, scene, &set, false, true)?, None),
@@ -213,18 +208,20 @@ impl Pass for GBufferPass {
             GBufferVariant::OverPrepass => "gbuffer over the prepass",
         }
     }
-    fn uses(&self) -> Vec<Use<'_>> {
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.set]
+    }
+    fn unbound(&self) -> Vec<Use<'_>> {
         let g = &self.gbuffer;
         // Over the prepass the depth is kept; the prepass writes no colour.
         let depth = match self.variant {
             GBufferVariant::OverPrepass => Use::image(&g.depth, Access::DepthAttachmentWrite),
             _ => Use::overwrite(&g.depth, Access::DepthAttachmentWrite),
         };
-        let mut uses = vec![depth, self.scene.instance_reads()];
+        let mut uses = vec![depth];
         if self.variant != GBufferVariant::DepthPrepass {
             uses.extend(g.colors().map(|c| Use::overwrite(c, Access::ColorAttachmentWrite)));
         }
-        uses.extend(self.frame.reads(Access::GraphicsShaderReadBuffer));
         uses
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
@@ -248,7 +245,7 @@ impl Pass for GBufferPass {
             .depth_attachment(&depth);
         unsafe {
             ctx.device.cmd_begin_rendering(cmd, &info);
-            self.pipeline.bind(cmd, &[self.set.set]);
+            self.pipeline.bind(cmd, &[self.set.raw()]);
             super::set_viewport(ctx, cmd, extent);
             match (self.variant, &self.masked) {
                 (GBufferVariant::Full, _) => self.scene.draw_all(ctx, cmd),
@@ -256,7 +253,7 @@ impl Pass for GBufferPass {
                 (GBufferVariant::OverPrepass, masked) => {
                     self.scene.draw_where(ctx, cmd, |d| !d.masked);
                     if let Some(masked) = masked {
-                        masked.bind(cmd, &[self.set.set]);
+                        masked.bind(cmd, &[self.set.raw()]);
                         self.scene.draw_where(ctx, cmd, |d| d.masked);
                     }
                 }

@@ -2,10 +2,9 @@
 //! normal-aware upsample to full resolution (only when k > 1).
 
 use super::gbuffer::GBuffer;
-use crate::gpu::{
-    shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuResult, Image, ImageDesc, Pipeline, Sampler,
-};
-use crate::render::graph::{Pass, QueueKind, Use};
+use crate::gpu::{shaders, Access, Bind, Buffer, Context, GpuResult, Image, ImageDesc, Pipeline, Sampler};
+use crate::render::binding::{Binds, PassSet};
+use crate::render::graph::{Pass, QueueKind};
 use crate::render::voxel::VoxelVolumes;
 use crate::render::FrameBuffers;
 use ash::vk;
@@ -69,14 +68,12 @@ impl GiTargets {
         [&self.diffuse, self.specular.as_ref().unwrap_or(&p.color), self.shadow.as_ref().unwrap_or(&p.shadow)]
     }
 
-    pub fn binds(&self, p: &GiPlaceholders) -> [Bind<'static>; 3] {
-        self.bound(p).map(|i| Bind::StorageImage(i.view))
-    }
-
-    /// Uses of everything bound, placeholders included (they are declared like the real
-    /// images so their layout is right, although the shaders never reach them).
-    pub fn uses<'a>(&'a self, p: &'a GiPlaceholders, access: Access) -> Vec<Use<'a>> {
-        self.bound(p).into_iter().map(|i| Use::image(i, access)).collect()
+    /// Diffuse, specular and shadow as storage images (three bindings, placeholders where
+    /// an output does not exist: the shaders never reach them, but they are declared like the
+    /// real images so their layout is right), touched with `access`.
+    pub fn storage<'a>(&'a self, p: &'a GiPlaceholders, access: Access) -> Binds<'a> {
+        let [d, s, sh] = self.bound(p);
+        Binds::new().storage_image(d, access).storage_image(s, access).storage_image(sh, access)
     }
 
     /// Every image, for memory reports.
@@ -86,15 +83,9 @@ impl GiTargets {
 }
 
 pub struct GiTracePass {
-    frame: FrameBuffers,
-    gbuffer: Arc<GBuffer>,
-    volumes: Arc<VoxelVolumes>,
-    /// The full-resolution radiance volume sampled below lod 1.
-    lod0: Arc<Image>,
     pub targets: GiTargets,
-    placeholders: Arc<GiPlaceholders>,
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
     _sampler: Sampler,
 }
 
@@ -108,38 +99,26 @@ impl GiTracePass {
         placeholders: &Arc<GiPlaceholders>,
     ) -> GpuResult<Self> {
         let sampler = GBuffer::sampler(ctx)?;
-        let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let v = volumes;
         let lod0 = v.final_radiance().clone();
-        let [d, s, sh] = targets.binds(placeholders);
-        let [pool_images, pool_sampler] = v.pool_binds();
-        let set = DescriptorSet::new(
-            ctx,
-            "gi trace",
-            vk::ShaderStageFlags::COMPUTE,
-            &[
-                Bind::Uniform(&frame.uniforms),
-                Bind::Storage(&frame.lights),
-                Bind::Uniform(&v.grid_buffer),
-                Bind::Uniform(&v.gi_params),
-                Bind::Sampled(gbuffer.depth.view, sampler.raw, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL),
-                Bind::Sampled(gbuffer.normal.view, sampler.raw, ro),
-                Bind::Sampled(gbuffer.specular.view, sampler.raw, ro),
-                Bind::Sampled(lod0.view, v.sampler.raw, ro),
-                Bind::SampledArray(v.directional.iter().map(|d| d.view).collect(), v.sampler.raw, ro),
-                d,
-                s,
-                sh,
-                v.brick_maps_bind(),
-                pool_images,
-                pool_sampler,
-            ],
-        )?;
+        let (buffer, read) = (Access::ComputeShaderReadBuffer, Access::ComputeShaderReadSampled);
+        let set = Binds::new()
+            .uniform(&frame.uniforms, buffer)
+            .storage(&frame.lights, buffer)
+            .loaded(Bind::Uniform(&v.grid_buffer))
+            .loaded(Bind::Uniform(&v.gi_params))
+            .extend(gbuffer.surface(sampler.raw))
+            .sampled(&gbuffer.specular, sampler.raw, read)
+            .extend(v.cone_volumes(&lod0))
+            .extend(targets.storage(placeholders, Access::ComputeShaderWrite))
+            .extend(v.brick_maps(Access::ComputeShaderReadStorage))
+            .extend(v.pools())
+            .build(ctx, "gi trace", vk::ShaderStageFlags::COMPUTE)?;
         let pipeline = Pipeline::compute(
             ctx,
             "gi trace",
             shaders::GI_TRACE_COMP,
-            &[set.layout],
+            &[set.layout()],
             0,
             &[
                 (0, u32::from(targets.specular.is_some())),
@@ -147,17 +126,7 @@ impl GiTracePass {
                 (2, v.diffuse_rays),
             ],
         )?;
-        Ok(GiTracePass {
-            frame: frame.clone(),
-            gbuffer: gbuffer.clone(),
-            volumes: volumes.clone(),
-            lod0,
-            targets,
-            placeholders: placeholders.clone(),
-            pipeline,
-            set,
-            _sampler: sampler,
-        })
+        Ok(GiTracePass { targets, pipeline, set, _sampler: sampler })
     }
 }
 
@@ -165,31 +134,22 @@ impl Pass for GiTracePass {
     fn name(&self) -> &str {
         "cone trace"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let mut uses = self.gbuffer.surface_reads().to_vec();
-        uses.push(Use::image(&self.gbuffer.specular, Access::ComputeShaderReadSampled));
-        uses.extend(self.volumes.cone_reads(&self.lod0));
-        uses.extend(self.targets.uses(&self.placeholders, Access::ComputeShaderWrite));
-        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.set]
     }
     fn queue(&self) -> QueueKind {
         QueueKind::Compute
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         self.pipeline.dispatch_pixels(cmd, &self.targets.diffuse);
     }
 }
 
 pub struct GiUpsamplePass {
-    frame: FrameBuffers,
-    gbuffer: Arc<GBuffer>,
-    low: GiTargets,
     pub targets: GiTargets,
-    placeholders: Arc<GiPlaceholders>,
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
     _sampler: Sampler,
 }
 
@@ -204,44 +164,22 @@ impl GiUpsamplePass {
         placeholders: &Arc<GiPlaceholders>,
     ) -> GpuResult<Self> {
         let sampler = GBuffer::sampler(ctx)?;
-        let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        let [ld, ls, lsh] = low.binds(placeholders);
-        let [d, s, sh] = targets.binds(placeholders);
-        let set = DescriptorSet::new(
-            ctx,
-            "gi upsample",
-            vk::ShaderStageFlags::COMPUTE,
-            &[
-                Bind::Uniform(&frame.uniforms),
-                Bind::Uniform(gi_params),
-                Bind::Sampled(gbuffer.depth.view, sampler.raw, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL),
-                Bind::Sampled(gbuffer.normal.view, sampler.raw, ro),
-                ld,
-                ls,
-                lsh,
-                d,
-                s,
-                sh,
-            ],
-        )?;
+        let set = Binds::new()
+            .uniform(&frame.uniforms, Access::ComputeShaderReadBuffer)
+            .loaded(Bind::Uniform(gi_params))
+            .extend(gbuffer.surface(sampler.raw))
+            .extend(low.storage(placeholders, Access::ComputeShaderReadStorage))
+            .extend(targets.storage(placeholders, Access::ComputeShaderWrite))
+            .build(ctx, "gi upsample", vk::ShaderStageFlags::COMPUTE)?;
         let pipeline = Pipeline::compute(
             ctx,
             "gi upsample",
             shaders::GI_UPSAMPLE_COMP,
-            &[set.layout],
+            &[set.layout()],
             0,
             &[(0, u32::from(targets.specular.is_some())), (1, u32::from(targets.shadow.is_some()))],
         )?;
-        Ok(GiUpsamplePass {
-            frame: frame.clone(),
-            gbuffer: gbuffer.clone(),
-            low: low.clone(),
-            targets,
-            placeholders: placeholders.clone(),
-            pipeline,
-            set,
-            _sampler: sampler,
-        })
+        Ok(GiUpsamplePass { targets, pipeline, set, _sampler: sampler })
     }
 }
 
@@ -249,18 +187,14 @@ impl Pass for GiUpsamplePass {
     fn name(&self) -> &str {
         "gi upsample"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let mut uses = self.gbuffer.surface_reads().to_vec();
-        uses.extend(self.low.uses(&self.placeholders, Access::ComputeShaderReadStorage));
-        uses.extend(self.targets.uses(&self.placeholders, Access::ComputeShaderWrite));
-        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.set]
     }
     fn queue(&self) -> QueueKind {
         QueueKind::Compute
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         self.pipeline.dispatch_pixels(cmd, &self.targets.diffuse);
     }
 }
@@ -268,26 +202,22 @@ impl Pass for GiUpsamplePass {
 /// `rsm+lpv`: the sum of two reduced-resolution diffuse results (the RSM gather's near field
 /// and the volume's far field), the input of the upsample and the lighting pass.
 pub struct GiAddPass {
-    parts: [Arc<Image>; 2],
     pub targets: GiTargets,
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
 }
 
 impl GiAddPass {
     pub fn new(ctx: &Arc<Context>, a: &GiTargets, b: &GiTargets, targets: GiTargets) -> GpuResult<Self> {
-        let set = DescriptorSet::new(
-            ctx,
-            "gi add",
-            vk::ShaderStageFlags::COMPUTE,
-            &[
-                Bind::StorageImage(a.diffuse.view),
-                Bind::StorageImage(b.diffuse.view),
-                Bind::StorageImage(targets.diffuse.view),
-            ],
-        )?;
-        let pipeline = Pipeline::compute(ctx, "gi add", shaders::GI_ADD_COMP, &[set.layout], 0, &[])?;
-        Ok(GiAddPass { parts: [a.diffuse.clone(), b.diffuse.clone()], targets, pipeline, set })
+        let read = Access::ComputeShaderReadStorage;
+        let set = Binds::new()
+            .storage_image(&a.diffuse, read)
+            .storage_image(&b.diffuse, read)
+            .storage_image(&targets.diffuse, Access::ComputeShaderWrite)
+            .overwritten()
+            .build(ctx, "gi add", vk::ShaderStageFlags::COMPUTE)?;
+        let pipeline = Pipeline::compute(ctx, "gi add", shaders::GI_ADD_COMP, &[set.layout()], 0, &[])?;
+        Ok(GiAddPass { targets, pipeline, set })
     }
 }
 
@@ -295,16 +225,14 @@ impl Pass for GiAddPass {
     fn name(&self) -> &str {
         "gi add"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let mut uses: Vec<Use> = self.parts.iter().map(|i| Use::image(i, Access::ComputeShaderReadStorage)).collect();
-        uses.push(Use::overwrite(&self.targets.diffuse, Access::ComputeShaderWrite));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.set]
     }
     fn queue(&self) -> QueueKind {
         QueueKind::Compute
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         self.pipeline.dispatch_pixels(cmd, &self.targets.diffuse);
     }
 }

@@ -2,8 +2,9 @@
 
 use super::gbuffer::GBuffer;
 use super::gi_trace::{GiPlaceholders, GiTargets};
-use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline, Sampler};
-use crate::render::graph::{Pass, Use};
+use crate::gpu::{shaders, Access, Context, GpuResult, Image, Pipeline, Sampler};
+use crate::render::binding::{Binds, PassSet};
+use crate::render::graph::Pass;
 use crate::render::FrameBuffers;
 use ash::vk;
 use std::sync::Arc;
@@ -60,15 +61,9 @@ pub struct LightingInputs<'a> {
 }
 
 pub struct LightingPass {
-    frame: FrameBuffers,
-    gbuffer: Arc<GBuffer>,
-    shadow_atlas: Arc<Image>,
-    /// The indirect light's targets and the traced visibility (placeholders where missing).
-    gi: GiTargets,
-    placeholders: Arc<GiPlaceholders>,
     pub radiance: Arc<Image>,
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
     _samplers: (Sampler, Sampler),
 }
 
@@ -87,31 +82,25 @@ impl LightingPass {
                 GiTargets { diffuse: placeholders.color.clone(), specular: None, shadow: shadow_visibility.cloned() }
             }
         };
-        let [gd, gs, gsh] = targets.binds(placeholders);
         let point = GBuffer::sampler(ctx)?;
         let compare = Sampler::new(ctx, "shadow compare sampler", &shadow_sampler_info())?;
-        let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        let depth_ro = vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL;
-        let set = DescriptorSet::new(
-            ctx,
-            "deferred lighting",
-            vk::ShaderStageFlags::COMPUTE,
-            &[
-                Bind::Uniform(&frame.uniforms),
-                Bind::Storage(&frame.lights),
-                Bind::Storage(&frame.shadow_views),
-                Bind::Sampled(gbuffer.depth.view, point.raw, depth_ro),
-                Bind::Sampled(gbuffer.albedo.view, point.raw, ro),
-                Bind::Sampled(gbuffer.normal.view, point.raw, ro),
-                Bind::Sampled(gbuffer.specular.view, point.raw, ro),
-                Bind::Sampled(gbuffer.emission.view, point.raw, ro),
-                Bind::Sampled(shadow_atlas.view, compare.raw, depth_ro),
-                Bind::StorageImage(radiance.view),
-                gd,
-                gs,
-                gsh,
-            ],
-        )?;
+        let (buffer, read, depth) =
+            (Access::ComputeShaderReadBuffer, Access::ComputeShaderReadSampled, Access::ComputeShaderReadDepth);
+        let set = Binds::new()
+            .uniform(&frame.uniforms, buffer)
+            .storage(&frame.lights, buffer)
+            .storage(&frame.shadow_views, buffer)
+            .sampled(&gbuffer.depth, point.raw, depth)
+            .sampled(&gbuffer.albedo, point.raw, read)
+            .sampled(&gbuffer.normal, point.raw, read)
+            .sampled(&gbuffer.specular, point.raw, read)
+            .sampled(&gbuffer.emission, point.raw, read)
+            .sampled(shadow_atlas, compare.raw, depth)
+            .storage_image(radiance, Access::ComputeShaderWrite)
+            .overwritten()
+            // Without GI the diffuse and specular placeholders are one image (held once).
+            .extend(targets.storage(placeholders, Access::ComputeShaderReadStorage))
+            .build(ctx, "deferred lighting", vk::ShaderStageFlags::COMPUTE)?;
         let rt_specular = gi.as_ref().is_some_and(|g| g.rt_specular);
         let spec = [
             (0, u32::from(gi.is_some())),
@@ -121,18 +110,8 @@ impl LightingPass {
             (4, u32::from(targets.specular.is_some() && rt_specular)),
         ];
         let pipeline =
-            Pipeline::compute(ctx, "deferred lighting", shaders::DEFERRED_LIGHT_COMP, &[set.layout], 0, &spec)?;
-        Ok(LightingPass {
-            frame: frame.clone(),
-            gbuffer: gbuffer.clone(),
-            shadow_atlas: shadow_atlas.clone(),
-            gi: targets,
-            placeholders: placeholders.clone(),
-            radiance: radiance.clone(),
-            pipeline,
-            set,
-            _samplers: (point, compare),
-        })
+            Pipeline::compute(ctx, "deferred lighting", shaders::DEFERRED_LIGHT_COMP, &[set.layout()], 0, &spec)?;
+        Ok(LightingPass { radiance: radiance.clone(), pipeline, set, _samplers: (point, compare) })
     }
 }
 
@@ -140,29 +119,11 @@ impl Pass for LightingPass {
     fn name(&self) -> &str {
         "deferred lighting"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let g = &self.gbuffer;
-        let mut uses = vec![
-            Use::image(&g.depth, Access::ComputeShaderReadDepth),
-            Use::image(&g.albedo, Access::ComputeShaderReadSampled),
-            Use::image(&g.normal, Access::ComputeShaderReadSampled),
-            Use::image(&g.specular, Access::ComputeShaderReadSampled),
-            Use::image(&g.emission, Access::ComputeShaderReadSampled),
-            Use::image(&self.shadow_atlas, Access::ComputeShaderReadDepth),
-            Use::overwrite(&self.radiance, Access::ComputeShaderWrite),
-        ];
-        let bound = self.gi.bound(&self.placeholders);
-        for (i, image) in bound.iter().enumerate() {
-            // Without GI the diffuse and specular placeholders are one image: declared once.
-            if !bound[..i].iter().any(|b| Arc::ptr_eq(b, image)) {
-                uses.push(Use::image(image, Access::ComputeShaderReadStorage));
-            }
-        }
-        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.set]
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         self.pipeline.dispatch_pixels(cmd, &self.radiance);
     }
 }

@@ -6,10 +6,9 @@
 use super::gbuffer::GBuffer;
 use super::gi_trace::GiTargets;
 use super::rsm::RsmMaps;
-use crate::gpu::{
-    shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuResult, Image, ImageDesc, Pipeline, Sampler,
-};
-use crate::render::graph::{Pass, QueueKind, Use};
+use crate::gpu::{shaders, Access, Bind, Buffer, Context, GpuResult, Image, ImageDesc, Pipeline, Sampler};
+use crate::render::binding::{Binds, PassSet};
+use crate::render::graph::{Pass, QueueKind};
 use crate::render::lpv::GpuLpvGrid;
 use crate::render::voxel::VoxelGrid;
 use crate::render::FrameBuffers;
@@ -32,7 +31,7 @@ pub struct LpvVolumes {
     /// The injected light plus every step's: what the lookup reads.
     pub sum: [Arc<Image>; 3],
     /// The injection's fixed-point sums (lpv_accum.glsl).
-    pub accum: Buffer,
+    pub accum: Arc<Buffer>,
     /// Trilinear, clamped to the edge (surfaces on the grid's boundary keep their cells).
     pub sampler: Sampler,
 }
@@ -66,13 +65,13 @@ impl LpvVolumes {
         )?;
         Ok(LpvVolumes {
             grid_buffer: Buffer::uniform(ctx, "lpv grid", &GpuLpvGrid::new(&grid, occlusion, skipped, quanta))?,
-            accum: Buffer::new(
+            accum: Arc::new(Buffer::new(
                 ctx,
                 "lpv injection sums",
                 ACCUM_INTS * 4 * (grid.resolution as u64).pow(3),
                 vk::BufferUsageFlags::STORAGE_BUFFER,
                 MemoryLocation::GpuOnly,
-            )?,
+            )?),
             grid,
             light: [rgb("light a")?, rgb("light b")?],
             geometry: mk("lpv geometry".into())?,
@@ -87,8 +86,9 @@ impl LpvVolumes {
     }
 }
 
-fn storage<'a>(images: &[Arc<Image>]) -> Vec<Bind<'a>> {
-    images.iter().map(|i| Bind::StorageImage(i.view)).collect()
+/// Each image of `images` a storage image of its own binding, touched with `access`.
+fn storage(images: &[Arc<Image>], access: Access) -> Binds<'_> {
+    images.iter().fold(Binds::new(), |b, i| b.storage_image(i, access))
 }
 
 /// Injection: every map texel adds its VPL and its blocking lobe to the cells they fall in
@@ -98,35 +98,33 @@ pub struct LpvInjectPass {
     maps: Arc<RsmMaps>,
     vols: Arc<LpvVolumes>,
     queue: QueueKind,
-    clear: (Pipeline, DescriptorSet),
-    inject: (Pipeline, DescriptorSet),
-    resolve: (Pipeline, DescriptorSet),
+    clear: (Pipeline, PassSet),
+    inject: (Pipeline, PassSet),
+    resolve: (Pipeline, PassSet),
     _sampler: Sampler,
 }
 
 impl LpvInjectPass {
     pub fn new(ctx: &Arc<Context>, maps: &Arc<RsmMaps>, vols: &Arc<LpvVolumes>, queue: QueueKind) -> GpuResult<Self> {
         let sampler = GBuffer::sampler(ctx)?;
-        let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        let stage = vk::ShaderStageFlags::COMPUTE;
-        let step = |name: &str, code: &[u8], binds: &[Bind]| -> GpuResult<(Pipeline, DescriptorSet)> {
-            let set = DescriptorSet::new(ctx, name, stage, binds)?;
-            Ok((Pipeline::compute(ctx, name, code, &[set.layout], 0, &[])?, set))
+        let step = |name: &str, code: &[u8], binds: Binds| -> GpuResult<(Pipeline, PassSet)> {
+            let set = binds.build(ctx, name, vk::ShaderStageFlags::COMPUTE)?;
+            Ok((Pipeline::compute(ctx, name, code, &[set.layout()], 0, &[])?, set))
         };
-        let clear = step(
-            "lpv clear",
-            shaders::LPV_CLEAR_COMP,
-            &[Bind::Uniform(&vols.grid_buffer), Bind::Storage(&vols.accum)],
-        )?;
-        let mut binds = vec![Bind::Uniform(&vols.grid_buffer)];
-        binds.extend(maps.colors().map(|i| Bind::Sampled(i.view, sampler.raw, ro)));
-        binds.push(Bind::Storage(&vols.accum));
-        let inject = step("lpv inject", shaders::LPV_INJECT_COMP, &binds)?;
-        let mut binds = vec![Bind::Uniform(&vols.grid_buffer), Bind::Storage(&vols.accum)];
-        binds.extend(storage(&vols.light[0]));
-        binds.push(Bind::StorageImage(vols.geometry.view));
-        binds.extend(storage(&vols.sum));
-        let resolve = step("lpv resolve", shaders::LPV_RESOLVE_COMP, &binds)?;
+        let grid = || Binds::new().loaded(Bind::Uniform(&vols.grid_buffer));
+        let write = Access::ComputeShaderWrite;
+        let clear = step("lpv clear", shaders::LPV_CLEAR_COMP, grid().storage(&vols.accum, write))?;
+        let maps_read =
+            maps.colors().into_iter().fold(grid(), |b, i| b.sampled(i, sampler.raw, Access::ComputeShaderReadSampled));
+        let inject = step("lpv inject", shaders::LPV_INJECT_COMP, maps_read.storage(&vols.accum, write))?;
+        // The resolve writes every cell of the light, the geometry and the sum.
+        let resolved = grid()
+            .storage(&vols.accum, write)
+            .extend(storage(&vols.light[0], write).overwritten_all())
+            .storage_image(&vols.geometry, write)
+            .overwritten()
+            .extend(storage(&vols.sum, write).overwritten_all());
+        let resolve = step("lpv resolve", shaders::LPV_RESOLVE_COMP, resolved)?;
         Ok(LpvInjectPass { maps: maps.clone(), vols: vols.clone(), queue, clear, inject, resolve, _sampler: sampler })
     }
 }
@@ -135,14 +133,8 @@ impl Pass for LpvInjectPass {
     fn name(&self) -> &str {
         "lpv inject"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let v = &self.vols;
-        let mut uses: Vec<Use> =
-            self.maps.colors().into_iter().map(|i| Use::image(i, Access::ComputeShaderReadSampled)).collect();
-        let written = v.light[0].iter().chain(std::iter::once(&v.geometry)).chain(v.sum.iter());
-        uses.extend(written.map(|i| Use::overwrite(i, Access::ComputeShaderWrite)));
-        uses.push(Use::buffer(&v.accum, Access::ComputeShaderWrite));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.clear.1, &self.inject.1, &self.resolve.1]
     }
     fn queue(&self) -> QueueKind {
         self.queue
@@ -151,16 +143,16 @@ impl Pass for LpvInjectPass {
         let r = self.vols.grid.resolution;
         let rw = [Access::ComputeShaderWrite];
         let (p, set) = &self.clear;
-        p.bind(cmd, &[set.set]);
+        p.bind(cmd, &[set.raw()]);
         p.dispatch(cmd, [r, r, r], [4, 4, 4]);
         super::memory_barrier(ctx, cmd, &rw, &rw);
         let (p, set) = &self.inject;
         let size = self.maps.flux.extent2d();
-        p.bind(cmd, &[set.set]);
+        p.bind(cmd, &[set.raw()]);
         p.dispatch(cmd, [size.width, size.height, self.maps.views.len() as u32], [8, 8, 1]);
         super::memory_barrier(ctx, cmd, &rw, &rw);
         let (p, set) = &self.resolve;
-        p.bind(cmd, &[set.set]);
+        p.bind(cmd, &[set.raw()]);
         p.dispatch(cmd, [r, r, r], [4, 4, 4]);
     }
 }
@@ -172,21 +164,25 @@ pub struct LpvPropagatePass {
     queue: QueueKind,
     pipeline: Pipeline,
     /// a -> b and b -> a.
-    sets: [DescriptorSet; 2],
+    sets: [PassSet; 2],
 }
 
 impl LpvPropagatePass {
     pub fn new(ctx: &Arc<Context>, vols: &Arc<LpvVolumes>, steps: u32, queue: QueueKind) -> GpuResult<Self> {
+        // Each step reads one light volume, writes the other and adds to the sum.
+        let write = Access::ComputeShaderWrite;
         let set = |from: usize| {
-            let mut binds = vec![Bind::Uniform(&vols.grid_buffer)];
-            binds.extend(storage(&vols.light[from]));
-            binds.push(Bind::StorageImage(vols.geometry.view));
-            binds.extend(storage(&vols.light[1 - from]));
-            binds.extend(storage(&vols.sum));
-            DescriptorSet::new(ctx, "lpv propagate", vk::ShaderStageFlags::COMPUTE, &binds)
+            Binds::new()
+                .loaded(Bind::Uniform(&vols.grid_buffer))
+                .extend(storage(&vols.light[from], write))
+                .storage_image(&vols.geometry, Access::ComputeShaderReadStorage)
+                .extend(storage(&vols.light[1 - from], write))
+                .extend(storage(&vols.sum, write))
+                .build(ctx, "lpv propagate", vk::ShaderStageFlags::COMPUTE)
         };
         let sets = [set(0)?, set(1)?];
-        let pipeline = Pipeline::compute(ctx, "lpv propagate", shaders::LPV_PROPAGATE_COMP, &[sets[0].layout], 4, &[])?;
+        let pipeline =
+            Pipeline::compute(ctx, "lpv propagate", shaders::LPV_PROPAGATE_COMP, &[sets[0].layout()], 4, &[])?;
         Ok(LpvPropagatePass { vols: vols.clone(), steps, queue, pipeline, sets })
     }
 }
@@ -195,12 +191,8 @@ impl Pass for LpvPropagatePass {
     fn name(&self) -> &str {
         "lpv propagate"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let v = &self.vols;
-        let mut uses: Vec<Use> =
-            v.light.iter().flatten().chain(v.sum.iter()).map(|i| Use::image(i, Access::ComputeShaderWrite)).collect();
-        uses.push(Use::image(&v.geometry, Access::ComputeShaderReadStorage));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        self.sets.iter().collect()
     }
     fn queue(&self) -> QueueKind {
         self.queue
@@ -213,7 +205,7 @@ impl Pass for LpvPropagatePass {
                 let rw = [Access::ComputeShaderWrite];
                 super::memory_barrier(ctx, cmd, &rw, &rw);
             }
-            self.pipeline.bind(cmd, &[self.sets[(step % 2) as usize].set]);
+            self.pipeline.bind(cmd, &[self.sets[(step % 2) as usize].raw()]);
             self.pipeline.push(cmd, &step);
             self.pipeline.dispatch(cmd, [r, r, r], [4, 4, 4]);
         }
@@ -222,13 +214,10 @@ impl Pass for LpvPropagatePass {
 
 /// The per-pixel lookup of the summed light (at 1/k resolution).
 pub struct LpvLookupPass {
-    frame: FrameBuffers,
-    gbuffer: Arc<GBuffer>,
-    vols: Arc<LpvVolumes>,
     pub targets: GiTargets,
     queue: QueueKind,
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
     _sampler: Sampler,
 }
 
@@ -244,28 +233,18 @@ impl LpvLookupPass {
         queue: QueueKind,
     ) -> GpuResult<Self> {
         let sampler = GBuffer::sampler(ctx)?;
-        let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        let mut binds = vec![
-            Bind::Uniform(&frame.uniforms),
-            Bind::Uniform(gi_params),
-            Bind::Uniform(&vols.grid_buffer),
-            Bind::Sampled(gbuffer.depth.view, sampler.raw, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL),
-            Bind::Sampled(gbuffer.normal.view, sampler.raw, ro),
-        ];
-        binds.extend(vols.sum.iter().map(|i| Bind::Sampled(i.view, vols.sampler.raw, ro)));
-        binds.push(Bind::StorageImage(targets.diffuse.view));
-        let set = DescriptorSet::new(ctx, "lpv lookup", vk::ShaderStageFlags::COMPUTE, &binds)?;
-        let pipeline = Pipeline::compute(ctx, "lpv lookup", shaders::LPV_LOOKUP_COMP, &[set.layout], 0, &[])?;
-        Ok(LpvLookupPass {
-            frame: frame.clone(),
-            gbuffer: gbuffer.clone(),
-            vols: vols.clone(),
-            targets,
-            queue,
-            pipeline,
-            set,
-            _sampler: sampler,
-        })
+        let read = Access::ComputeShaderReadSampled;
+        let set = Binds::new()
+            .uniform(&frame.uniforms, Access::ComputeShaderReadBuffer)
+            .loaded(Bind::Uniform(gi_params))
+            .loaded(Bind::Uniform(&vols.grid_buffer))
+            .extend(gbuffer.surface(sampler.raw))
+            .extend(vols.sum.iter().fold(Binds::new(), |b, i| b.sampled(i, vols.sampler.raw, read)))
+            .storage_image(&targets.diffuse, Access::ComputeShaderWrite)
+            .overwritten()
+            .build(ctx, "lpv lookup", vk::ShaderStageFlags::COMPUTE)?;
+        let pipeline = Pipeline::compute(ctx, "lpv lookup", shaders::LPV_LOOKUP_COMP, &[set.layout()], 0, &[])?;
+        Ok(LpvLookupPass { targets, queue, pipeline, set, _sampler: sampler })
     }
 }
 
@@ -273,18 +252,14 @@ impl Pass for LpvLookupPass {
     fn name(&self) -> &str {
         "lpv lookup"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let mut uses = vec![Use::overwrite(&self.targets.diffuse, Access::ComputeShaderWrite)];
-        uses.extend(self.gbuffer.surface_reads());
-        uses.extend(self.vols.sum.iter().map(|i| Use::image(i, Access::ComputeShaderReadSampled)));
-        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.set]
     }
     fn queue(&self) -> QueueKind {
         self.queue
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         self.pipeline.dispatch_pixels(cmd, &self.targets.diffuse);
     }
 }

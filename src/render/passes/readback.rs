@@ -67,7 +67,7 @@ impl Pass for ImageDownload {
     fn name(&self) -> &str {
         &self.name
     }
-    fn uses(&self) -> Vec<Use<'_>> {
+    fn unbound(&self) -> Vec<Use<'_>> {
         vec![Use::image(&self.image, Access::TransferRead), Use::buffer(&self.buffer, Access::TransferWrite)]
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
@@ -100,7 +100,7 @@ impl Pass for HostReadPass {
     fn name(&self) -> &str {
         "host read"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
+    fn unbound(&self) -> Vec<Use<'_>> {
         self.buffers.iter().map(|b| Use::buffer(b, Access::HostRead)).collect()
     }
     fn record(&self, _ctx: &Context, _cmd: vk::CommandBuffer) {}

@@ -1,28 +1,27 @@
 //! Supersampling resolve (`render.supersample = k`): the frame renders at k x k times the
 //! output size and this pass box-filters each k x k block of radiance into one output pixel.
 
-use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline};
-use crate::render::graph::{Pass, Use};
+use crate::gpu::{shaders, Access, Context, GpuResult, Image, Pipeline};
+use crate::render::binding::{Binds, PassSet};
+use crate::render::graph::Pass;
 use ash::vk;
 use std::sync::Arc;
 
 pub struct ResolvePass {
-    samples: Arc<Image>,
     pub resolved: Arc<Image>,
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
 }
 
 impl ResolvePass {
     pub fn new(ctx: &Arc<Context>, samples: &Arc<Image>, resolved: &Arc<Image>, k: u32) -> GpuResult<Self> {
-        let set = DescriptorSet::new(
-            ctx,
-            "resolve",
-            vk::ShaderStageFlags::COMPUTE,
-            &[Bind::StorageImage(samples.view), Bind::StorageImage(resolved.view)],
-        )?;
-        let pipeline = Pipeline::compute(ctx, "resolve", shaders::RESOLVE_COMP, &[set.layout], 0, &[(0, k)])?;
-        Ok(ResolvePass { samples: samples.clone(), resolved: resolved.clone(), pipeline, set })
+        let set = Binds::new()
+            .storage_image(samples, Access::ComputeShaderReadStorage)
+            .storage_image(resolved, Access::ComputeShaderWrite)
+            .overwritten()
+            .build(ctx, "resolve", vk::ShaderStageFlags::COMPUTE)?;
+        let pipeline = Pipeline::compute(ctx, "resolve", shaders::RESOLVE_COMP, &[set.layout()], 0, &[(0, k)])?;
+        Ok(ResolvePass { resolved: resolved.clone(), pipeline, set })
     }
 }
 
@@ -30,14 +29,11 @@ impl Pass for ResolvePass {
     fn name(&self) -> &str {
         "supersample resolve"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        vec![
-            Use::image(&self.samples, Access::ComputeShaderReadStorage),
-            Use::overwrite(&self.resolved, Access::ComputeShaderWrite),
-        ]
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.set]
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         self.pipeline.dispatch_pixels(cmd, &self.resolved);
     }
 }

@@ -6,8 +6,9 @@
 use super::gbuffer::GBuffer;
 use super::gi_trace::GiTargets;
 use crate::gpu::{
-    shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuResult, GraphicsDesc, Image, ImageDesc, Pipeline, Sampler,
+    shaders, Access, Bind, Buffer, Context, GpuResult, GraphicsDesc, Image, ImageDesc, Pipeline, Sampler,
 };
+use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, QueueKind, Use};
 use crate::render::scene_gpu::SceneGpu;
 use crate::render::FrameBuffers;
@@ -77,9 +78,8 @@ impl RsmMaps {
 pub struct RsmPass {
     pub maps: Arc<RsmMaps>,
     scene: Arc<SceneGpu>,
-    frame: FrameBuffers,
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
 }
 
 impl RsmPass {
@@ -89,20 +89,14 @@ impl RsmPass {
         frame: &FrameBuffers,
         maps: &Arc<RsmMaps>,
     ) -> GpuResult<Self> {
-        let [materials, textures] = scene.materials.binds();
-        let set = DescriptorSet::new(
-            ctx,
-            "rsm",
-            vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
-            &[
-                Bind::Storage(&scene.instances),
-                Bind::Storage(&frame.shadow_views),
-                materials,
-                textures,
-                scene.materials.sampler_bind(),
-                Bind::Storage(&frame.lights),
-            ],
-        )?;
+        let buffer = Access::GraphicsShaderReadBuffer;
+        let set = Binds::new()
+            .storage(&scene.instances, buffer)
+            .storage(&frame.shadow_views, buffer)
+            .extend(scene.materials.binds())
+            .sampler(scene.materials.sampler.raw)
+            .storage(&frame.lights, buffer)
+            .build(ctx, "rsm", vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)?;
         let desc = GraphicsDesc {
             vertex_attributes: &[0, 1, 2],
             vert: shaders::RSM_VERT,
@@ -118,8 +112,8 @@ impl RsmPass {
             conservative: false,
             spec: &[(0, scene.materials.texture_count())],
         };
-        let pipeline = Pipeline::graphics(ctx, "rsm", &desc, &[set.layout], 16)?;
-        Ok(RsmPass { maps: maps.clone(), scene: scene.clone(), frame: frame.clone(), pipeline, set })
+        let pipeline = Pipeline::graphics(ctx, "rsm", &desc, &[set.layout()], 16)?;
+        Ok(RsmPass { maps: maps.clone(), scene: scene.clone(), pipeline, set })
     }
 
     fn attachment(view: vk::ImageView, layout: vk::ImageLayout) -> vk::RenderingAttachmentInfo<'static> {
@@ -135,13 +129,14 @@ impl Pass for RsmPass {
     fn name(&self) -> &str {
         "reflective shadow maps"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.set]
+    }
+    fn unbound(&self) -> Vec<Use<'_>> {
         let m = &self.maps;
         let mut uses: Vec<Use> =
             m.colors().into_iter().map(|i| Use::overwrite(i, Access::ColorAttachmentWrite)).collect();
         uses.push(Use::overwrite(&m.depth, Access::DepthAttachmentWrite));
-        uses.push(self.scene.instance_reads());
-        uses.extend(self.frame.reads(Access::GraphicsShaderReadBuffer));
         uses
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
@@ -162,7 +157,7 @@ impl Pass for RsmPass {
                 .depth_attachment(&depth);
             unsafe {
                 d.cmd_begin_rendering(cmd, &info);
-                self.pipeline.bind(cmd, &[self.set.set]);
+                self.pipeline.bind(cmd, &[self.set.raw()]);
                 super::set_viewport(ctx, cmd, extent);
                 self.pipeline.push(cmd, view);
                 self.scene.draw_all(ctx, cmd);
@@ -174,12 +169,9 @@ impl Pass for RsmPass {
 
 /// Gathers each traced pixel's indirect light from the maps (compute).
 pub struct RsmGatherPass {
-    frame: FrameBuffers,
-    gbuffer: Arc<GBuffer>,
-    maps: Arc<RsmMaps>,
     pub targets: GiTargets,
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
     _sampler: Sampler,
 }
 
@@ -198,36 +190,23 @@ impl RsmGatherPass {
         near: f32,
     ) -> GpuResult<Self> {
         let sampler = GBuffer::sampler(ctx)?;
-        let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
-        let set = DescriptorSet::new(
-            ctx,
-            "rsm gather",
-            vk::ShaderStageFlags::COMPUTE,
-            &[
-                Bind::Uniform(&frame.uniforms),
-                Bind::Uniform(gi_params),
-                Bind::Storage(&frame.shadow_views),
-                Bind::Storage(&maps.table),
-                Bind::Sampled(gbuffer.depth.view, sampler.raw, vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL),
-                Bind::Sampled(gbuffer.normal.view, sampler.raw, ro),
-                Bind::Sampled(maps.flux.view, sampler.raw, ro),
-                Bind::Sampled(maps.normal.view, sampler.raw, ro),
-                Bind::Sampled(maps.position.view, sampler.raw, ro),
-                Bind::StorageImage(targets.diffuse.view),
-            ],
-        )?;
+        let (buffer, read) = (Access::ComputeShaderReadBuffer, Access::ComputeShaderReadSampled);
+        let set = Binds::new()
+            .uniform(&frame.uniforms, buffer)
+            .loaded(Bind::Uniform(gi_params))
+            .storage(&frame.shadow_views, buffer)
+            .loaded(Bind::Storage(&maps.table))
+            .extend(gbuffer.surface(sampler.raw))
+            .sampled(&maps.flux, sampler.raw, read)
+            .sampled(&maps.normal, sampler.raw, read)
+            .sampled(&maps.position, sampler.raw, read)
+            .storage_image(&targets.diffuse, Access::ComputeShaderWrite)
+            .overwritten()
+            .build(ctx, "rsm gather", vk::ShaderStageFlags::COMPUTE)?;
         let spec =
             [(0, maps.views.len() as u32), (1, gi.rsm_samples), (2, gi.rsm_radius.to_bits()), (3, near.to_bits())];
-        let pipeline = Pipeline::compute(ctx, "rsm gather", shaders::RSM_GATHER_COMP, &[set.layout], 0, &spec)?;
-        Ok(RsmGatherPass {
-            frame: frame.clone(),
-            gbuffer: gbuffer.clone(),
-            maps: maps.clone(),
-            targets,
-            pipeline,
-            set,
-            _sampler: sampler,
-        })
+        let pipeline = Pipeline::compute(ctx, "rsm gather", shaders::RSM_GATHER_COMP, &[set.layout()], 0, &spec)?;
+        Ok(RsmGatherPass { targets, pipeline, set, _sampler: sampler })
     }
 }
 
@@ -235,18 +214,14 @@ impl Pass for RsmGatherPass {
     fn name(&self) -> &str {
         "rsm gather"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let mut uses = vec![Use::overwrite(&self.targets.diffuse, Access::ComputeShaderWrite)];
-        uses.extend(self.gbuffer.surface_reads());
-        uses.extend(self.maps.colors().map(|i| Use::image(i, Access::ComputeShaderReadSampled)));
-        uses.extend(self.frame.reads(Access::ComputeShaderReadBuffer));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.set]
     }
     fn queue(&self) -> QueueKind {
         QueueKind::Compute
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         self.pipeline.dispatch_pixels(cmd, &self.targets.diffuse);
     }
 }

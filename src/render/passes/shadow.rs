@@ -8,7 +8,8 @@
 //! the maps and draws the moving casters over it. Depth keeps the nearest fragment whatever
 //! the order of the draws, so the maps hold the same bytes as one pass over every caster.
 
-use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, GraphicsDesc, Image, Pipeline};
+use crate::gpu::{shaders, Access, Context, GpuResult, GraphicsDesc, Image, Pipeline};
+use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, Use};
 use crate::render::scene_gpu::{Draw, SceneGpu};
 use crate::render::FrameBuffers;
@@ -42,12 +43,11 @@ pub struct ShadowPass {
     pub target: Arc<Image>,
     casters: Casters,
     scene: Arc<SceneGpu>,
-    frame: FrameBuffers,
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
     /// For alpha-masked draws (only where the scene has some): the depth pipeline plus an
     /// alpha test, which costs the early depth test, so opaque draws keep the plain one.
-    masked: Option<(Pipeline, DescriptorSet)>,
+    masked: Option<(Pipeline, PassSet)>,
     views: u32,
     /// The views this frame draws (set before the frame is recorded; every view at first).
     drawn: RefCell<Vec<u32>>,
@@ -87,37 +87,30 @@ impl ShadowPass {
         views: u32,
         casters: Casters,
     ) -> GpuResult<Self> {
-        let set = DescriptorSet::new(
+        let buffer = Access::GraphicsShaderReadBuffer;
+        let set = Binds::new().storage(&scene.instances, buffer).storage(&frame.shadow_views, buffer).build(
             ctx,
             "shadow",
             vk::ShaderStageFlags::VERTEX,
-            &[Bind::Storage(&scene.instances), Bind::Storage(&frame.shadow_views)],
         )?;
         let pipeline = Pipeline::graphics(
             ctx,
             "shadow",
             &depth_only(target, shaders::SHADOW_VERT, None, &[0], &[]),
-            &[set.layout],
+            &[set.layout()],
             4,
         )?;
         let masked = if scene.draws.iter().any(|d| d.masked && casters.draws(d)) {
-            let [materials, textures] = scene.materials.binds();
-            let set = DescriptorSet::new(
-                ctx,
-                "shadow (masked)",
-                vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
-                &[
-                    Bind::Storage(&scene.instances),
-                    Bind::Storage(&frame.shadow_views),
-                    materials,
-                    textures,
-                    scene.materials.sampler_bind(),
-                ],
-            )?;
+            let set = Binds::new()
+                .storage(&scene.instances, buffer)
+                .storage(&frame.shadow_views, buffer)
+                .extend(scene.materials.binds())
+                .sampler(scene.materials.sampler.raw)
+                .build(ctx, "shadow (masked)", vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)?;
             let spec = [(0, scene.materials.texture_count())];
             let desc =
                 depth_only(target, shaders::SHADOW_MASKED_VERT, Some(shaders::SHADOW_MASKED_FRAG), &[0, 2], &spec);
-            Some((Pipeline::graphics(ctx, "shadow (masked)", &desc, &[set.layout], 4)?, set))
+            Some((Pipeline::graphics(ctx, "shadow (masked)", &desc, &[set.layout()], 4)?, set))
         } else {
             None
         };
@@ -131,7 +124,6 @@ impl ShadowPass {
             target: target.clone(),
             casters,
             scene: scene.clone(),
-            frame: frame.clone(),
             pipeline,
             set,
             masked,
@@ -169,7 +161,7 @@ impl ShadowPass {
         let casters = self.casters;
         unsafe {
             d.cmd_begin_rendering(cmd, &info);
-            self.pipeline.bind(cmd, &[self.set.set]);
+            self.pipeline.bind(cmd, &[self.set.raw()]);
             super::set_viewport(ctx, cmd, extent);
             // Constant and slope-scaled bias against acne; the lighting pass adds a
             // normal offset (shadow_normal_bias).
@@ -177,7 +169,7 @@ impl ShadowPass {
             self.pipeline.push(cmd, &view);
             self.scene.draw_where(ctx, cmd, |d| !d.masked && casters.draws(d));
             if let Some((pipeline, set)) = &self.masked {
-                pipeline.bind(cmd, &[set.set]);
+                pipeline.bind(cmd, &[set.raw()]);
                 pipeline.push(cmd, &view);
                 self.scene.draw_where(ctx, cmd, |d| d.masked && casters.draws(d));
             }
@@ -190,13 +182,14 @@ impl Pass for ShadowPass {
     fn name(&self) -> &str {
         self.name
     }
-    fn uses(&self) -> Vec<Use<'_>> {
+    fn sets(&self) -> Vec<&PassSet> {
+        std::iter::once(&self.set).chain(self.masked.as_ref().map(|(_, set)| set)).collect()
+    }
+    fn unbound(&self) -> Vec<Use<'_>> {
         // Views that are not drawn keep what they hold; the moving casters draw over the copy.
         let whole = self.casters != Casters::Moving && self.drawn.borrow().len() as u32 == self.views;
         let target = Use { discard: whole, ..Use::image(&self.target, Access::DepthAttachmentWrite) };
-        let mut uses = vec![target, self.scene.instance_reads()];
-        uses.extend(self.frame.reads(Access::GraphicsShaderReadBuffer));
-        uses
+        vec![target]
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         for &view in self.drawn.borrow().iter() {
@@ -230,7 +223,7 @@ impl Pass for ShadowCopyPass {
     fn name(&self) -> &str {
         "shadow map copy"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
+    fn unbound(&self) -> Vec<Use<'_>> {
         let whole = self.copied.borrow().len() as u32 == self.views;
         let maps = Use { discard: whole, ..Use::image(&self.maps, Access::TransferWrite) };
         vec![Use::image(&self.cache, Access::TransferRead), maps]

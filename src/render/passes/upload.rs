@@ -42,7 +42,7 @@ impl Pass for UploadPass {
     fn name(&self) -> &str {
         "frame data upload"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
+    fn unbound(&self) -> Vec<Use<'_>> {
         self.targets.iter().map(|b| Use::buffer(b, Access::TransferWrite)).collect()
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {

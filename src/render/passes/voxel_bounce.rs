@@ -3,8 +3,9 @@
 //! radiance volume and its directional mips, the reflected light written to the scratch
 //! volume; then the bounced radiance: direct plus that indirect light, per occupied voxel.
 
-use super::voxel_list::{dispatch_list, list_reads, StaleZero};
-use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline};
+use super::voxel_list::{dispatch_list, list_arguments, StaleZero};
+use crate::gpu::{shaders, Access, Bind, Context, GpuResult, Image, Pipeline};
+use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, QueueKind, Use};
 use crate::render::voxel::{list_header, VoxelVolumes};
 use crate::render::FrameBuffers;
@@ -13,12 +14,9 @@ use std::sync::Arc;
 
 pub struct VoxelBouncePass {
     name: String,
-    frame: FrameBuffers,
     volumes: Arc<VoxelVolumes>,
-    source: Arc<Image>,
-    target: Arc<Image>,
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
 }
 
 impl VoxelBouncePass {
@@ -31,39 +29,24 @@ impl VoxelBouncePass {
         source: &Arc<Image>,
     ) -> GpuResult<Self> {
         let target = &volumes.bounced[1];
-        let ro = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
         let v = volumes;
         let name = format!("voxel bounce ({} -> {})", source.name, target.name);
-        let [pool_images, pool_sampler] = v.pool_binds();
-        let set = DescriptorSet::new(
-            ctx,
-            &name,
-            vk::ShaderStageFlags::COMPUTE,
-            &[
-                Bind::Uniform(&v.grid_buffer),
-                Bind::Uniform(&v.bounce_params),
-                Bind::Sampled(source.view, v.sampler.raw, ro),
-                Bind::SampledArray(v.directional.iter().map(|d| d.view).collect(), v.sampler.raw, ro),
-                Bind::StorageImage(v.albedo.view),
-                Bind::StorageImage(v.normal.view),
-                Bind::Uniform(&frame.uniforms),
-                Bind::StorageImage(target.view),
-                Bind::Storage(&v.list.buffer),
-                v.brick_maps_bind(),
-                pool_images,
-                pool_sampler,
-            ],
-        )?;
-        let pipeline = Pipeline::compute(ctx, "voxel bounce", shaders::VOXEL_BOUNCE_COMP, &[set.layout], 0, &[])?;
-        Ok(VoxelBouncePass {
-            name,
-            frame: frame.clone(),
-            volumes: volumes.clone(),
-            source: source.clone(),
-            target: target.clone(),
-            pipeline,
-            set,
-        })
+        let (read, buffer) = (Access::ComputeShaderReadStorage, Access::ComputeShaderReadBuffer);
+        let set = Binds::new()
+            .loaded(Bind::Uniform(&v.grid_buffer))
+            .loaded(Bind::Uniform(&v.bounce_params))
+            .extend(v.cone_volumes(source))
+            .storage_image(&v.albedo, read)
+            .storage_image(&v.normal, read)
+            .uniform(&frame.uniforms, buffer)
+            // Voxels that do not gather this update keep their last indirect light.
+            .storage_image(target, Access::ComputeShaderWrite)
+            .storage(&v.list.buffer, buffer)
+            .extend(v.brick_maps(read))
+            .extend(v.pools())
+            .build(ctx, &name, vk::ShaderStageFlags::COMPUTE)?;
+        let pipeline = Pipeline::compute(ctx, "voxel bounce", shaders::VOXEL_BOUNCE_COMP, &[set.layout()], 0, &[])?;
+        Ok(VoxelBouncePass { name, volumes: volumes.clone(), pipeline, set })
     }
 }
 
@@ -71,26 +54,17 @@ impl Pass for VoxelBouncePass {
     fn name(&self) -> &str {
         &self.name
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let v = &self.volumes;
-        let mut uses = vec![
-            Use::image(&self.source, Access::ComputeShaderReadSampled),
-            Use::image(&v.albedo, Access::ComputeShaderReadStorage),
-            Use::image(&v.normal, Access::ComputeShaderReadStorage),
-            // Voxels that do not gather this update keep their last indirect light.
-            Use::image(&self.target, Access::ComputeShaderWrite),
-            Use::buffer(&self.frame.uniforms, Access::ComputeShaderReadBuffer),
-        ];
-        uses.extend(v.directional.iter().map(|d| Use::image(d, Access::ComputeShaderReadSampled)));
-        uses.extend(v.pool_uses());
-        uses.extend(list_reads(v));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.set]
+    }
+    fn unbound(&self) -> Vec<Use<'_>> {
+        vec![list_arguments(&self.volumes)]
     }
     fn queue(&self) -> QueueKind {
         QueueKind::Compute
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         dispatch_list(&self.pipeline, cmd, &self.volumes, list_header::OCCUPIED);
     }
 }
@@ -101,28 +75,30 @@ impl Pass for VoxelBouncePass {
 pub struct BounceComposePass {
     volumes: Arc<VoxelVolumes>,
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
     stale: Option<StaleZero>,
 }
 
 impl BounceComposePass {
     pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>) -> GpuResult<Self> {
         let v = volumes;
-        let set = DescriptorSet::new(
+        let read = Access::ComputeShaderReadStorage;
+        let set = Binds::new()
+            .storage(&v.list.buffer, Access::ComputeShaderReadBuffer)
+            .storage_image(&v.radiance, read)
+            .storage_image(&v.bounced[1], read)
+            .storage_image(&v.bounced[0], Access::ComputeShaderWrite)
+            .loaded(Bind::Uniform(&v.grid_buffer))
+            .extend(v.brick_maps(read))
+            .build(ctx, "voxel bounce compose", vk::ShaderStageFlags::COMPUTE)?;
+        let pipeline = Pipeline::compute(
             ctx,
             "voxel bounce compose",
-            vk::ShaderStageFlags::COMPUTE,
-            &[
-                Bind::Storage(&v.list.buffer),
-                Bind::StorageImage(v.radiance.view),
-                Bind::StorageImage(v.bounced[1].view),
-                Bind::StorageImage(v.bounced[0].view),
-                Bind::Uniform(&v.grid_buffer),
-                v.brick_maps_bind(),
-            ],
+            shaders::VOXEL_BOUNCE_COMPOSE_COMP,
+            &[set.layout()],
+            0,
+            &[],
         )?;
-        let pipeline =
-            Pipeline::compute(ctx, "voxel bounce compose", shaders::VOXEL_BOUNCE_COMPOSE_COMP, &[set.layout], 0, &[])?;
         let stale = StaleZero::new(ctx, volumes, &volumes.bounced[0])?;
         Ok(BounceComposePass { volumes: volumes.clone(), pipeline, set, stale })
     }
@@ -132,19 +108,11 @@ impl Pass for BounceComposePass {
     fn name(&self) -> &str {
         "voxel bounce compose"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let v = &self.volumes;
-        let mut uses = vec![
-            Use::image(&v.radiance, Access::ComputeShaderReadStorage),
-            Use::image(&v.bounced[1], Access::ComputeShaderReadStorage),
-            Use::image(&v.bounced[0], Access::ComputeShaderWrite),
-        ];
-        uses.extend(list_reads(v));
-        if let Some(stale) = &self.stale {
-            uses.push(Use::image(&v.albedo, Access::ComputeShaderReadStorage));
-            uses.extend(stale.uses(v));
-        }
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        std::iter::once(&self.set).chain(self.stale.as_ref().map(StaleZero::set)).collect()
+    }
+    fn unbound(&self) -> Vec<Use<'_>> {
+        vec![list_arguments(&self.volumes)]
     }
     fn queue(&self) -> QueueKind {
         QueueKind::Compute
@@ -153,7 +121,7 @@ impl Pass for BounceComposePass {
         if let Some(stale) = &self.stale {
             stale.record(ctx, cmd, &self.volumes);
         }
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         dispatch_list(&self.pipeline, cmd, &self.volumes, list_header::OCCUPIED);
     }
 }

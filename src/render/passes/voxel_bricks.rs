@@ -8,7 +8,8 @@
 //! (render::bricks::capacity).
 
 use super::voxel_resolve::Scan;
-use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Pipeline};
+use crate::gpu::{shaders, Access, Bind, Context, GpuResult, Pipeline};
+use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, Use};
 use crate::render::voxel::{ScanLayout, VoxelVolumes, SCAN_POOL_TOTAL};
 use ash::vk;
@@ -28,7 +29,7 @@ enum Mode {
 /// the static voxelization, which records the static bricks).
 fn alloc_pipeline(
     ctx: &Arc<Context>,
-    set: &DescriptorSet,
+    set: &PassSet,
     pool: u32,
     mode: Mode,
     (after_static, scan_first): (bool, u32),
@@ -41,7 +42,7 @@ fn alloc_pipeline(
         Mode::Restart => "voxel brick restart".to_string(),
     };
     let spec = [(0, pool), (1, mode as u32), (2, u32::from(after_static)), (3, scan_first)];
-    Pipeline::compute(ctx, &name, shaders::BRICK_ALLOC_COMP, &[set.layout], 0, &spec)
+    Pipeline::compute(ctx, &name, shaders::BRICK_ALLOC_COMP, &[set.layout()], 0, &spec)
 }
 
 /// A step of brick_alloc.comp over the maps and lists: one dispatch per pool over its map
@@ -53,7 +54,7 @@ pub struct BrickListPass {
     volumes: Arc<VoxelVolumes>,
     per_pool: Vec<Pipeline>,
     then: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
     name: &'static str,
     /// Allocation only: the counting before it.
     counting: Option<Counting>,
@@ -91,13 +92,13 @@ impl BrickListPass {
         scan: Option<&Arc<Scan>>,
     ) -> GpuResult<Option<Self>> {
         let Some(bricks) = &volumes.bricks else { return Ok(None) };
-        let binds = [
-            Bind::Uniform(&volumes.grid_buffer),
-            volumes.brick_maps_bind(),
-            Bind::Storage(&bricks.lists),
-            Bind::Storage(&volumes.scan),
-        ];
-        let set = DescriptorSet::new(ctx, name, vk::ShaderStageFlags::COMPUTE, &binds)?;
+        let write = Access::ComputeShaderWrite;
+        let set = Binds::new()
+            .loaded(Bind::Uniform(&volumes.grid_buffer))
+            .extend(volumes.brick_maps(write))
+            .storage(&bricks.lists, write)
+            .storage(&volumes.scan, write)
+            .build(ctx, name, vk::ShaderStageFlags::COMPUTE)?;
         let regions = ScanLayout::new(volumes.grid.resolution, Some(&bricks.layout)).pools;
         let per_pool = (0..regions.len() as u32)
             .map(|p| alloc_pipeline(ctx, &set, p, per_pool_mode, (false, regions[p as usize].0)))
@@ -120,11 +121,8 @@ impl Pass for BrickListPass {
     fn name(&self) -> &str {
         self.name
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let mut uses = self.volumes.brick_map_uses(Access::ComputeShaderWrite);
-        uses.extend(self.volumes.bricks.iter().map(|b| Use::buffer(&b.lists, Access::ComputeShaderWrite)));
-        uses.push(Use::buffer(&self.volumes.scan, Access::ComputeShaderWrite));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        std::iter::once(&self.set).chain(self.counting.as_ref().map(|(_, scan)| scan.set())).collect()
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let b = self.volumes.bricks.as_ref().expect("a brick list pass has bricks");
@@ -132,7 +130,7 @@ impl Pass for BrickListPass {
         if let Some((count, scan)) = &self.counting {
             // Pending bricks per block of each map, then their offsets, then the slots.
             for (pipeline, (_, blocks)) in count {
-                pipeline.bind(cmd, &[self.set.set]);
+                pipeline.bind(cmd, &[self.set.raw()]);
                 pipeline.dispatch(cmd, [*blocks, 1, 1], [1; 3]);
             }
             super::memory_barrier(ctx, cmd, &rw, &rw);
@@ -141,17 +139,17 @@ impl Pass for BrickListPass {
             }
             super::memory_barrier(ctx, cmd, &rw, &rw);
             for (pipeline, (_, (_, blocks))) in self.per_pool.iter().zip(count) {
-                pipeline.bind(cmd, &[self.set.set]);
+                pipeline.bind(cmd, &[self.set.raw()]);
                 pipeline.dispatch(cmd, [*blocks, 1, 1], [1; 3]);
             }
         } else {
             for (pipeline, pool) in self.per_pool.iter().zip(&b.layout.pools) {
-                pipeline.bind(cmd, &[self.set.set]);
+                pipeline.bind(cmd, &[self.set.raw()]);
                 pipeline.dispatch(cmd, [pool.map_side; 3], [4; 3]);
             }
         }
         super::memory_barrier(ctx, cmd, &rw, &rw);
-        self.then.bind(cmd, &[self.set.set]);
+        self.then.bind(cmd, &[self.set.raw()]);
         self.then.dispatch(cmd, [1; 3], [4; 3]);
     }
 }
@@ -162,7 +160,7 @@ pub struct BrickClearPass {
     volumes: Arc<VoxelVolumes>,
     /// Per pool: the pipeline and its set (pool 0 binds the full-resolution volumes, pool p
     /// the six directional volumes of its level).
-    clears: Vec<(Pipeline, DescriptorSet)>,
+    clears: Vec<(Pipeline, PassSet)>,
 }
 
 impl BrickClearPass {
@@ -170,29 +168,28 @@ impl BrickClearPass {
     pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>) -> GpuResult<Option<Self>> {
         let Some(bricks) = &volumes.bricks else { return Ok(None) };
         let v = volumes;
-        let words = [&v.albedo, &v.normal, v.emission_or_albedo()].map(|i| i.view).to_vec();
+        let write = Access::ComputeShaderWrite;
+        let words = [&v.albedo, &v.normal, v.emission_or_albedo()];
         // The sampled radiance volumes (9^3 per slot): the radiance, then the bounced radiance
         // where it exists; the bounce's scratch (8^3 per slot) where it exists.
-        let radiance = vec![v.radiance.view, v.bounced.first().unwrap_or(&v.radiance).view];
+        let radiance = [&v.radiance, v.bounced.first().unwrap_or(&v.radiance)];
         let scratch = v.bounced.get(1);
         let clears = (0..bricks.layout.pools.len())
             .map(|p| {
-                let faces = (0..6)
-                    .map(|f| p.checked_sub(1).map_or(v.pool_placeholder.view, |l| bricks.directional[l][f].view))
-                    .collect();
-                let binds = [
-                    Bind::Uniform(&v.grid_buffer),
-                    v.brick_maps_bind(),
-                    Bind::Storage(&bricks.lists),
-                    Bind::StorageImageArray(words.clone()),
-                    Bind::StorageImageArray(radiance.clone()),
-                    Bind::StorageImageArray(faces),
-                    Bind::StorageImage(scratch.unwrap_or(&v.pool_placeholder).view),
-                ];
-                let set = DescriptorSet::new(ctx, "voxel brick clear", vk::ShaderStageFlags::COMPUTE, &binds)?;
+                let faces = (0..6).map(|f| p.checked_sub(1).map_or(&v.pool_placeholder, |l| &bricks.directional[l][f]));
+                let set = Binds::new()
+                    .loaded(Bind::Uniform(&v.grid_buffer))
+                    .extend(v.brick_maps(Access::ComputeShaderReadStorage))
+                    .storage(&bricks.lists, Access::ComputeShaderReadBuffer)
+                    .storage_images(words, write)
+                    .storage_images(radiance, write)
+                    .storage_images(faces, write)
+                    .storage_image(scratch.unwrap_or(&v.pool_placeholder), write)
+                    .build(ctx, "voxel brick clear", vk::ShaderStageFlags::COMPUTE)?;
                 let name = format!("voxel brick clear {p}");
                 let constants = [(0, p as u32), (1, u32::from(scratch.is_some()))];
-                let pipeline = Pipeline::compute(ctx, &name, shaders::BRICK_CLEAR_COMP, &[set.layout], 0, &constants)?;
+                let pipeline =
+                    Pipeline::compute(ctx, &name, shaders::BRICK_CLEAR_COMP, &[set.layout()], 0, &constants)?;
                 Ok((pipeline, set))
             })
             .collect::<GpuResult<Vec<_>>>()?;
@@ -204,25 +201,17 @@ impl Pass for BrickClearPass {
     fn name(&self) -> &str {
         "clear bricks dynamic"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let v = &self.volumes;
-        let b = v.bricks.as_ref().expect("bricks");
-        let mut uses = v.brick_map_uses(Access::ComputeShaderReadStorage);
-        uses.push(Use::buffer(&b.lists, Access::IndirectCommandRead));
-        uses.push(Use::buffer(&b.lists, Access::ComputeShaderReadBuffer));
-        let mut images = vec![&v.albedo, &v.normal];
-        images.extend(v.emission.iter());
-        images.push(&v.radiance);
-        images.extend(v.bounced.iter());
-        images.extend(b.directional.iter().flatten());
-        images.push(&v.pool_placeholder);
-        uses.extend(images.into_iter().map(|i| Use::image(i, Access::ComputeShaderWrite)));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        self.clears.iter().map(|(_, set)| set).collect()
+    }
+    fn unbound(&self) -> Vec<Use<'_>> {
+        let b = self.volumes.bricks.as_ref().expect("bricks");
+        vec![Use::buffer(&b.lists, Access::IndirectCommandRead)]
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
         let lists = &self.volumes.bricks.as_ref().expect("bricks").lists;
         for (p, (pipeline, set)) in self.clears.iter().enumerate() {
-            pipeline.bind(cmd, &[set.set]);
+            pipeline.bind(cmd, &[set.raw()]);
             pipeline.dispatch_indirect(cmd, lists, crate::render::bricks::list_header::dynamic_range(p));
         }
     }

@@ -2,8 +2,9 @@
 //! (transfer), and before each dynamic update only the voxels the last dynamic voxelization
 //! filled, the list's dynamic range (compute), which then becomes the stale list.
 
-use super::voxel_list::{ListKeeper, ListStep};
-use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Pipeline};
+use super::voxel_list::{list_arguments, ListKeeper, ListStep};
+use crate::gpu::{shaders, Access, Bind, Context, GpuResult, Pipeline};
+use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, Use};
 use crate::render::voxel::{list_header, VoxelVolumes};
 use ash::vk;
@@ -23,7 +24,7 @@ impl Pass for VoxelClearPass {
     fn name(&self) -> &str {
         "voxel clear"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
+    fn unbound(&self) -> Vec<Use<'_>> {
         let mut uses: Vec<Use> =
             self.volumes.all().into_iter().map(|v| Use::overwrite(v, Access::TransferWrite)).collect();
         uses.push(Use::buffer(&self.volumes.list.buffer, Access::TransferWrite));
@@ -58,28 +59,28 @@ impl Pass for VoxelClearPass {
 pub struct DynamicClearPass {
     volumes: Arc<VoxelVolumes>,
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
     keeper: Arc<ListKeeper>,
 }
 
 impl DynamicClearPass {
     pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>, keeper: &Arc<ListKeeper>) -> GpuResult<Self> {
         let stale = volumes.list.stale.as_ref().expect("a scene with dynamic objects has a stale list");
-        let binds = [
-            Bind::StorageImage(volumes.albedo.view),
-            Bind::StorageImage(volumes.normal.view),
-            Bind::StorageImage(volumes.emission_or_albedo().view),
-            Bind::Storage(&volumes.list.buffer),
-            Bind::Storage(stale),
-            Bind::Uniform(&volumes.grid_buffer),
-            volumes.brick_maps_bind(),
-        ];
-        let set = DescriptorSet::new(ctx, "voxel clear dynamic", vk::ShaderStageFlags::COMPUTE, &binds)?;
+        let write = Access::ComputeShaderWrite;
+        let set = Binds::new()
+            .storage_image(&volumes.albedo, write)
+            .storage_image(&volumes.normal, write)
+            .storage_image(volumes.emission_or_albedo(), write)
+            .storage(&volumes.list.buffer, write)
+            .storage(stale, write)
+            .loaded(Bind::Uniform(&volumes.grid_buffer))
+            .extend(volumes.brick_maps(Access::ComputeShaderReadStorage))
+            .build(ctx, "voxel clear dynamic", vk::ShaderStageFlags::COMPUTE)?;
         let pipeline = Pipeline::compute(
             ctx,
             "voxel clear dynamic",
             shaders::VOXEL_CLEAR_DYNAMIC_COMP,
-            &[set.layout],
+            &[set.layout()],
             0,
             &[(2, u32::from(volumes.needs.emission))],
         )?;
@@ -91,19 +92,14 @@ impl Pass for DynamicClearPass {
     fn name(&self) -> &str {
         "voxel clear dynamic"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let v = &self.volumes;
-        let mut uses =
-            vec![Use::image(&v.albedo, Access::ComputeShaderWrite), Use::image(&v.normal, Access::ComputeShaderWrite)];
-        uses.extend(v.emission.as_ref().map(|e| Use::image(e, Access::ComputeShaderWrite)));
-        uses.push(Use::buffer(&v.list.buffer, Access::IndirectCommandRead));
-        uses.push(Use::buffer(&v.list.buffer, Access::ComputeShaderWrite));
-        uses.extend(v.list.stale.iter().map(|s| Use::buffer(s, Access::ComputeShaderWrite)));
-        uses.extend(v.brick_map_uses(Access::ComputeShaderReadStorage));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.set, self.keeper.set()]
+    }
+    fn unbound(&self) -> Vec<Use<'_>> {
+        vec![list_arguments(&self.volumes)]
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         self.pipeline.dispatch_indirect(cmd, &self.volumes.list.buffer, list_header::DYNAMIC);
         // The bookkeeping rewrites the arguments the dispatch read and reads what it wrote.
         let dispatched = [Access::IndirectCommandRead, Access::ComputeShaderWrite];

@@ -5,7 +5,8 @@
 //! voxelization appends the dynamic ones; the voxel light, the bounce and the dynamic clear
 //! dispatch over it, so they cost what the scene's surfaces hold rather than N^3.
 
-use crate::gpu::{shaders, Access, Bind, Buffer, Context, DescriptorSet, GpuResult, Image, Pipeline};
+use crate::gpu::{shaders, Access, Bind, Buffer, Context, GpuResult, Image, Pipeline};
+use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, Use};
 use crate::render::voxel::{list_header, VoxelVolumes};
 use ash::vk;
@@ -26,25 +27,28 @@ pub enum ListStep {
 /// The bookkeeping pipeline and its set (shared by every step).
 pub struct ListKeeper {
     pipeline: Pipeline,
-    set: DescriptorSet,
-    volumes: Arc<VoxelVolumes>,
+    set: PassSet,
 }
 
 impl ListKeeper {
     pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>) -> GpuResult<Arc<ListKeeper>> {
-        let set = DescriptorSet::new(
+        let set = Binds::new().storage(&volumes.list.buffer, Access::ComputeShaderWrite).build(
             ctx,
             "voxel list",
             vk::ShaderStageFlags::COMPUTE,
-            &[Bind::Storage(&volumes.list.buffer)],
         )?;
-        let pipeline = Pipeline::compute(ctx, "voxel list", shaders::VOXEL_LIST_COMP, &[set.layout], 4, &[])?;
-        Ok(Arc::new(ListKeeper { pipeline, set, volumes: volumes.clone() }))
+        let pipeline = Pipeline::compute(ctx, "voxel list", shaders::VOXEL_LIST_COMP, &[set.layout()], 4, &[])?;
+        Ok(Arc::new(ListKeeper { pipeline, set }))
+    }
+
+    /// Its set (the passes that run a step list it with their own).
+    pub fn set(&self) -> &PassSet {
+        &self.set
     }
 
     /// Record one step (a single invocation).
     pub fn record(&self, cmd: vk::CommandBuffer, step: ListStep) {
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         self.pipeline.push(cmd, &(step as u32));
         self.pipeline.dispatch(cmd, [1; 3], [1; 3]);
     }
@@ -70,8 +74,8 @@ impl Pass for VoxelListPass {
             ListStep::Cleared => "voxel list (cleared)",
         }
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        vec![Use::buffer(&self.keeper.volumes.list.buffer, Access::ComputeShaderWrite)]
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![self.keeper.set()]
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
         self.keeper.record(cmd, self.step);
@@ -83,51 +87,43 @@ pub fn dispatch_list(pipeline: &Pipeline, cmd: vk::CommandBuffer, volumes: &Voxe
     pipeline.dispatch_indirect(cmd, &volumes.list.buffer, range);
 }
 
-/// The uses of a pass that dispatches over the list and reads its entries.
-pub fn list_reads(volumes: &VoxelVolumes) -> Vec<Use<'_>> {
-    let list = &volumes.list.buffer;
-    // The list's voxels are found in the bricked volumes through the brick maps.
-    let mut uses = volumes.brick_map_uses(Access::ComputeShaderReadStorage);
-    uses.extend([Use::buffer(list, Access::IndirectCommandRead), Use::buffer(list, Access::ComputeShaderReadBuffer)]);
-    uses
+/// The indirect arguments of a pass that dispatches over the list ([`dispatch_list`]).
+pub fn list_arguments(volumes: &VoxelVolumes) -> Use<'_> {
+    Use::buffer(&volumes.list.buffer, Access::IndirectCommandRead)
 }
 
 /// Zeroes one radiance volume at the stale voxels that are still empty (glsl/voxel_stale.comp).
 /// Only with dynamic objects: without them no voxel is ever emptied after the first clear.
 pub struct StaleZero {
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
 }
 
 impl StaleZero {
-    pub fn new(ctx: &Arc<Context>, volumes: &VoxelVolumes, target: &Image) -> GpuResult<Option<StaleZero>> {
+    pub fn new(ctx: &Arc<Context>, volumes: &VoxelVolumes, target: &Arc<Image>) -> GpuResult<Option<StaleZero>> {
         let Some(stale) = &volumes.list.stale else { return Ok(None) };
-        let set = DescriptorSet::new(
-            ctx,
-            &format!("voxel stale ({})", target.name),
-            vk::ShaderStageFlags::COMPUTE,
-            &[
-                Bind::Storage(&volumes.list.buffer),
-                Bind::Storage(stale),
-                Bind::StorageImage(volumes.albedo.view),
-                Bind::StorageImage(target.view),
-                Bind::Uniform(&volumes.grid_buffer),
-                volumes.brick_maps_bind(),
-            ],
-        )?;
-        let pipeline = Pipeline::compute(ctx, "voxel stale", shaders::VOXEL_STALE_COMP, &[set.layout], 0, &[])?;
+        let (buffer, read) = (Access::ComputeShaderReadBuffer, Access::ComputeShaderReadStorage);
+        let set = Binds::new()
+            .storage(&volumes.list.buffer, buffer)
+            .storage(stale, buffer)
+            .storage_image(&volumes.albedo, read)
+            .storage_image(target, Access::ComputeShaderWrite)
+            .loaded(Bind::Uniform(&volumes.grid_buffer))
+            .extend(volumes.brick_maps(read))
+            .build(ctx, &format!("voxel stale ({})", target.name), vk::ShaderStageFlags::COMPUTE)?;
+        let pipeline = Pipeline::compute(ctx, "voxel stale", shaders::VOXEL_STALE_COMP, &[set.layout()], 0, &[])?;
         Ok(Some(StaleZero { pipeline, set }))
     }
 
-    /// The stale list it reads (the target and albedo are declared by the owning pass).
-    pub fn uses<'a>(&self, volumes: &'a VoxelVolumes) -> Vec<Use<'a>> {
-        volumes.list.stale.iter().map(|s| Use::buffer(s, Access::ComputeShaderReadBuffer)).collect()
+    /// Its set: the owning pass lists it with its own.
+    pub fn set(&self) -> &PassSet {
+        &self.set
     }
 
     /// Zero the stale voxels, then a barrier so the owning pass's own writes to the target
     /// come after (the voxel sets are disjoint, but the target is one resource).
     pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, volumes: &VoxelVolumes) {
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         dispatch_list(&self.pipeline, cmd, volumes, list_header::STALE);
         super::memory_barrier(ctx, cmd, &[Access::ComputeShaderWrite], &[Access::ComputeShaderWrite]);
     }
@@ -161,7 +157,7 @@ impl Pass for BufferDownload {
     fn name(&self) -> &str {
         "buffer readback"
     }
-    fn uses(&self) -> Vec<Use<'_>> {
+    fn unbound(&self) -> Vec<Use<'_>> {
         vec![Use::buffer(&self.source, Access::TransferRead), Use::buffer(&self.buffer, Access::TransferWrite)]
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {

@@ -5,7 +5,8 @@
 //! followed by the pass that fills the bricks' aprons (glsl/brick_apron.comp); the coarser
 //! levels are dense and built as before.
 
-use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Image, Pipeline};
+use crate::gpu::{shaders, Access, Bind, Context, GpuResult, Image, Pipeline};
+use crate::render::binding::{Binds, PassSet};
 use crate::render::bricks::list_header;
 use crate::render::graph::{Pass, QueueKind, Use};
 use crate::render::voxel::VoxelVolumes;
@@ -27,9 +28,9 @@ struct Step {
     dst: Level,
     pipeline: Pipeline,
     /// None for level 0, whose set names the source volume (one per mip pass).
-    set: Option<DescriptorSet>,
+    set: Option<PassSet>,
     /// The apron fill after a pooled level.
-    apron: Option<(Pipeline, DescriptorSet)>,
+    apron: Option<(Pipeline, PassSet)>,
 }
 
 /// What every mip build shares: the pipelines and the sets of levels 1.. .
@@ -44,7 +45,7 @@ impl VoxelMips {
         let pooled = v.bricks.as_ref().map_or(0, |b| b.directional.len());
         let dense_levels = v.directional[0].desc.mip_levels;
         let levels: Vec<Level> = (1..=pooled).map(Level::Pooled).chain((0..dense_levels).map(Level::Dense)).collect();
-        let probe = mip_set(ctx, v, "probe", &[v.radiance.view; 6], Level::Dense(0))?;
+        let probe = mip_set(ctx, v, "probe", source(&v.radiance), Level::Dense(0))?;
         let mut steps = Vec::new();
         for (i, &dst) in levels.iter().enumerate() {
             let src = (i > 0).then(|| levels[i - 1]);
@@ -54,8 +55,8 @@ impl VoxelMips {
             };
             let name = format!("voxel mips level {i}");
             let spec = [(0, u32::from(src.is_none())), (1, pool(src)), (2, pool(Some(dst)))];
-            let pipeline = Pipeline::compute(ctx, &name, shaders::ANISO_MIP_COMP, &[probe.layout], 0, &spec)?;
-            let set = src.map(|s| mip_set(ctx, v, &name, &level_views(v, s), dst)).transpose()?;
+            let pipeline = Pipeline::compute(ctx, &name, shaders::ANISO_MIP_COMP, &[probe.layout()], 0, &spec)?;
+            let set = src.map(|s| mip_set(ctx, v, &name, level(v, s), dst)).transpose()?;
             let apron = match dst {
                 Level::Pooled(p) => Some(apron_step(ctx, v, p)?),
                 Level::Dense(_) => None,
@@ -65,7 +66,12 @@ impl VoxelMips {
         Ok(Arc::new(VoxelMips { volumes: v.clone(), steps }))
     }
 
-    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, level0: &DescriptorSet) {
+    /// The sets of the levels above 0 and of the aprons.
+    fn sets(&self) -> impl Iterator<Item = &PassSet> {
+        self.steps.iter().flat_map(|s| s.set.iter().chain(s.apron.iter().map(|(_, set)| set)))
+    }
+
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, level0: &PassSet) {
         let v = &self.volumes;
         for (i, step) in self.steps.iter().enumerate() {
             // Each level reads the one written by the previous dispatch: the dependency comes
@@ -73,14 +79,14 @@ impl VoxelMips {
             if i > 0 {
                 super::memory_barrier(ctx, cmd, &[Access::ComputeShaderWrite], &[Access::ComputeShaderWrite]);
             }
-            step.pipeline.bind(cmd, &[step.set.as_ref().unwrap_or(level0).set]);
+            step.pipeline.bind(cmd, &[step.set.as_ref().unwrap_or(level0).raw()]);
             match step.dst {
                 Level::Pooled(p) => {
                     let lists = &v.bricks.as_ref().expect("pooled levels have bricks").lists;
                     step.pipeline.dispatch_indirect(cmd, lists, list_header::range(p));
                     let (apron, set) = step.apron.as_ref().expect("a pooled level has an apron step");
                     super::memory_barrier(ctx, cmd, &[Access::ComputeShaderWrite], &[Access::ComputeShaderWrite]);
-                    apron.bind(cmd, &[set.set]);
+                    apron.bind(cmd, &[set.raw()]);
                     apron.dispatch_indirect(cmd, lists, list_header::range(p));
                 }
                 Level::Dense(l) => step.pipeline.dispatch(cmd, [v.directional[0].level_size(l); 3], [4; 3]),
@@ -89,54 +95,45 @@ impl VoxelMips {
     }
 }
 
-/// The views of level `l` of the six directional volumes.
-fn level_views(v: &VoxelVolumes, l: Level) -> Vec<vk::ImageView> {
+/// Level `l` of the six directional volumes as storage views, read and written by the chain:
+/// a dense level is rewritten whole; a pooled level's resident bricks are (aprons too), the
+/// rest stay empty.
+fn level(v: &VoxelVolumes, l: Level) -> Binds<'_> {
+    let write = Access::ComputeShaderWrite;
     match l {
-        Level::Pooled(p) => v.bricks.as_ref().expect("bricks").directional[p - 1].iter().map(|i| i.view).collect(),
-        Level::Dense(d) => v.directional.iter().map(|i| i.level_views[d as usize]).collect(),
+        Level::Pooled(p) => Binds::new().storage_images(&v.bricks.as_ref().expect("bricks").directional[p - 1], write),
+        Level::Dense(d) => Binds::new()
+            .storage_views(v.directional.iter().map(|i| (i, i.level_views[d as usize])), write)
+            .overwritten(),
     }
 }
 
-/// Source views (six), the destination level, the grid, the brick maps and lists.
-fn mip_set(
-    ctx: &Arc<Context>,
-    v: &VoxelVolumes,
-    name: &str,
-    src: &[vk::ImageView],
-    dst: Level,
-) -> GpuResult<DescriptorSet> {
+/// Level 0's source: one full-resolution radiance volume, bound six times.
+fn source(volume: &Arc<Image>) -> Binds<'_> {
+    Binds::new().storage_images([volume; 6], Access::ComputeShaderReadStorage)
+}
+
+/// The source (six views), the destination level, the grid, the brick maps and lists.
+fn mip_set<'a>(ctx: &Arc<Context>, v: &'a VoxelVolumes, name: &str, src: Binds<'a>, dst: Level) -> GpuResult<PassSet> {
     // Without bricks the shader never reads the brick lists: the voxel list stands in.
-    let lists = v.bricks.as_ref().map_or(&*v.list.buffer, |b| &*b.lists);
-    DescriptorSet::new(
-        ctx,
-        name,
-        vk::ShaderStageFlags::COMPUTE,
-        &[
-            Bind::StorageImageArray(src.to_vec()),
-            Bind::StorageImageArray(level_views(v, dst)),
-            Bind::Uniform(&v.grid_buffer),
-            v.brick_maps_bind(),
-            Bind::Storage(lists),
-        ],
-    )
+    let lists = v.bricks.as_ref().map_or(&v.list.buffer, |b| &b.lists);
+    src.extend(level(v, dst))
+        .loaded(Bind::Uniform(&v.grid_buffer))
+        .extend(v.brick_maps(Access::ComputeShaderReadStorage))
+        .storage(lists, Access::ComputeShaderReadBuffer)
+        .build(ctx, name, vk::ShaderStageFlags::COMPUTE)
 }
 
 /// The apron fill of pool p: pipeline and set.
-fn apron_step(ctx: &Arc<Context>, v: &VoxelVolumes, p: usize) -> GpuResult<(Pipeline, DescriptorSet)> {
+fn apron_step(ctx: &Arc<Context>, v: &VoxelVolumes, p: usize) -> GpuResult<(Pipeline, PassSet)> {
     let b = v.bricks.as_ref().expect("bricks");
     let name = format!("voxel brick aprons (pool {p})");
-    let set = DescriptorSet::new(
-        ctx,
-        &name,
-        vk::ShaderStageFlags::COMPUTE,
-        &[
-            Bind::StorageImageArray(level_views(v, Level::Pooled(p))),
-            Bind::Uniform(&v.grid_buffer),
-            v.brick_maps_bind(),
-            Bind::Storage(&b.lists),
-        ],
-    )?;
-    let pipeline = Pipeline::compute(ctx, &name, shaders::BRICK_APRON_COMP, &[set.layout], 0, &[(0, p as u32)])?;
+    let set = level(v, Level::Pooled(p))
+        .loaded(Bind::Uniform(&v.grid_buffer))
+        .extend(v.brick_maps(Access::ComputeShaderReadStorage))
+        .storage(&b.lists, Access::ComputeShaderReadBuffer)
+        .build(ctx, &name, vk::ShaderStageFlags::COMPUTE)?;
+    let pipeline = Pipeline::compute(ctx, &name, shaders::BRICK_APRON_COMP, &[set.layout()], 0, &[(0, p as u32)])?;
     Ok((pipeline, set))
 }
 
@@ -144,8 +141,7 @@ fn apron_step(ctx: &Arc<Context>, v: &VoxelVolumes, p: usize) -> GpuResult<(Pipe
 pub struct VoxelMipPass {
     name: String,
     mips: Arc<VoxelMips>,
-    source: Arc<Image>,
-    level0: DescriptorSet,
+    level0: PassSet,
 }
 
 impl VoxelMipPass {
@@ -157,12 +153,7 @@ impl VoxelMipPass {
     ) -> GpuResult<Self> {
         let name = format!("voxel mips ({})", source.name);
         let dst = mips.steps[0].dst;
-        Ok(VoxelMipPass {
-            level0: mip_set(ctx, volumes, &name, &[source.view; 6], dst)?,
-            name,
-            mips: mips.clone(),
-            source: source.clone(),
-        })
+        Ok(VoxelMipPass { level0: mip_set(ctx, volumes, &name, self::source(source), dst)?, name, mips: mips.clone() })
     }
 }
 
@@ -170,21 +161,12 @@ impl Pass for VoxelMipPass {
     fn name(&self) -> &str {
         &self.name
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let v = &self.mips.volumes;
-        let mut uses = vec![Use::image(&self.source, Access::ComputeShaderReadStorage)];
-        uses.extend(v.directional.iter().map(|d| Use::overwrite(d, Access::ComputeShaderWrite)));
-        if let Some(b) = &v.bricks {
-            // Resident bricks are rewritten whole (aprons too); the rest stay empty.
-            uses.extend(b.directional.iter().flatten().map(|d| Use::image(d, Access::ComputeShaderWrite)));
-            uses.push(Use::buffer(&b.lists, Access::IndirectCommandRead));
-            uses.push(Use::buffer(&b.lists, Access::ComputeShaderReadBuffer));
-        } else {
-            uses.push(Use::buffer(&v.list.buffer, Access::ComputeShaderReadBuffer));
-            // bound, unread
-        }
-        uses.extend(v.brick_map_uses(Access::ComputeShaderReadStorage));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        std::iter::once(&self.level0).chain(self.mips.sets()).collect()
+    }
+    fn unbound(&self) -> Vec<Use<'_>> {
+        let b = self.mips.volumes.bricks.as_ref();
+        b.map(|b| Use::buffer(&b.lists, Access::IndirectCommandRead)).into_iter().collect()
     }
     fn queue(&self) -> QueueKind {
         QueueKind::Compute

@@ -5,8 +5,9 @@
 //! run whatever order the fragments came in. After a dynamic voxelization the dynamic voxels
 //! (appended by the voxelizer; their order decides nothing) are resolved over the list.
 
-use super::voxel_list::dispatch_list;
-use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, Pipeline};
+use super::voxel_list::{dispatch_list, list_arguments};
+use crate::gpu::{shaders, Access, Bind, Context, GpuResult, Pipeline};
+use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, Use};
 use crate::render::voxel::{list_header, VoxelVolumes};
 use ash::vk;
@@ -24,21 +25,29 @@ enum Mode {
 /// offsets in a fixed order.
 pub struct Scan {
     pipeline: Pipeline,
-    set: DescriptorSet,
+    set: PassSet,
 }
 
 impl Scan {
     pub fn new(ctx: &Arc<Context>, volumes: &VoxelVolumes) -> GpuResult<Scan> {
-        let set =
-            DescriptorSet::new(ctx, "voxel scan", vk::ShaderStageFlags::COMPUTE, &[Bind::Storage(&volumes.scan)])?;
-        let pipeline = Pipeline::compute(ctx, "voxel scan", shaders::SCAN_COMP, &[set.layout], 12, &[])?;
+        let set = Binds::new().storage(&volumes.scan, Access::ComputeShaderWrite).build(
+            ctx,
+            "voxel scan",
+            vk::ShaderStageFlags::COMPUTE,
+        )?;
+        let pipeline = Pipeline::compute(ctx, "voxel scan", shaders::SCAN_COMP, &[set.layout()], 12, &[])?;
         Ok(Scan { pipeline, set })
+    }
+
+    /// Its set: the passes that run it list it with their own.
+    pub fn set(&self) -> &PassSet {
+        &self.set
     }
 
     /// The `count` words from word `first` made exclusive prefix sums; their total into word
     /// `total_at`.
     pub fn record(&self, cmd: vk::CommandBuffer, first: u32, count: u32, total_at: u32) {
-        self.pipeline.bind(cmd, &[self.set.set]);
+        self.pipeline.bind(cmd, &[self.set.raw()]);
         self.pipeline.push(cmd, &[first, count, total_at]);
         self.pipeline.dispatch(cmd, [1; 3], [1; 3]);
     }
@@ -46,7 +55,7 @@ impl Scan {
 
 pub struct VoxelResolvePass {
     volumes: Arc<VoxelVolumes>,
-    set: DescriptorSet,
+    set: PassSet,
     /// Static: count, write; dynamic: resolve.
     pipelines: Vec<Pipeline>,
     /// Static only: the scan that turns the bricks' counts into list offsets.
@@ -66,20 +75,27 @@ impl VoxelResolvePass {
 
     fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>, scan: Option<&Arc<Scan>>) -> GpuResult<Self> {
         let v = volumes;
-        let binds = [
-            Bind::Uniform(&v.grid_buffer),
-            v.sums_bind(),
-            Bind::StorageImage(v.albedo.view),
-            Bind::StorageImage(v.normal.view),
-            Bind::StorageImage(v.emission_or_albedo().view),
-            Bind::Storage(&v.list.buffer),
-            Bind::Storage(&v.scan),
-            v.brick_maps_bind(),
-        ];
-        let set = DescriptorSet::new(ctx, "voxel resolve", vk::ShaderStageFlags::COMPUTE, &binds)?;
+        let write = Access::ComputeShaderWrite;
+        let binds = Binds::new()
+            .loaded(Bind::Uniform(&v.grid_buffer))
+            .extend(v.sums_bound(write))
+            .storage_image(&v.albedo, write)
+            .storage_image(&v.normal, write)
+            .storage_image(v.emission_or_albedo(), write)
+            .storage(&v.list.buffer, write);
+        // Only the static steps count into the scan buffer.
+        let binds = match scan {
+            Some(_) => binds.storage(&v.scan, write),
+            None => binds.idle(Bind::Storage(&v.scan)),
+        };
+        let set = binds.extend(v.brick_maps(Access::ComputeShaderReadStorage)).build(
+            ctx,
+            "voxel resolve",
+            vk::ShaderStageFlags::COMPUTE,
+        )?;
         let pipeline = |mode: Mode| {
             let spec = [(0, mode as u32), (1, u32::from(v.needs.emission))];
-            Pipeline::compute(ctx, "voxel resolve", shaders::VOXEL_RESOLVE_COMP, &[set.layout], 0, &spec)
+            Pipeline::compute(ctx, "voxel resolve", shaders::VOXEL_RESOLVE_COMP, &[set.layout()], 0, &spec)
         };
         let pipelines = match scan {
             Some(_) => vec![pipeline(Mode::Count)?, pipeline(Mode::Write)?],
@@ -97,13 +113,13 @@ impl VoxelResolvePass {
             super::memory_barrier(ctx, cmd, &rw, &rw);
         };
         let [count, write] = &self.pipelines[..] else { unreachable!("two static steps") };
-        count.bind(cmd, &[self.set.set]);
+        count.bind(cmd, &[self.set.raw()]);
         count.dispatch(cmd, [bricks; 3], [1; 3]);
         between(ctx);
         // The counts after the header; their total into word 0.
         scan.record(cmd, crate::render::voxel::SCAN_VOXELS, bricks_total, 0);
         between(ctx);
-        write.bind(cmd, &[self.set.set]);
+        write.bind(cmd, &[self.set.raw()]);
         write.dispatch(cmd, [bricks; 3], [1; 3]);
     }
 }
@@ -116,24 +132,20 @@ impl Pass for VoxelResolvePass {
             "voxel resolve dynamic"
         }
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let v = &self.volumes;
-        let mut uses = v.sums_uses(Access::ComputeShaderWrite);
-        uses.extend([&v.albedo, &v.normal].map(|i| Use::image(i, Access::ComputeShaderWrite)));
-        uses.extend(v.emission.iter().map(|e| Use::image(e, Access::ComputeShaderWrite)));
-        uses.push(Use::buffer(&v.list.buffer, Access::ComputeShaderWrite));
+    fn sets(&self) -> Vec<&PassSet> {
+        std::iter::once(&self.set).chain(self.scan.as_deref().map(Scan::set)).collect()
+    }
+    fn unbound(&self) -> Vec<Use<'_>> {
         match &self.scan {
-            Some(_) => uses.push(Use::buffer(&v.scan, Access::ComputeShaderWrite)),
-            None => uses.push(Use::buffer(&v.list.buffer, Access::IndirectCommandRead)),
+            Some(_) => Vec::new(),
+            None => vec![list_arguments(&self.volumes)],
         }
-        uses.extend(v.brick_map_uses(Access::ComputeShaderReadStorage));
-        uses
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         match &self.scan {
             Some(scan) => self.record_static(ctx, cmd, scan),
             None => {
-                self.pipelines[0].bind(cmd, &[self.set.set]);
+                self.pipelines[0].bind(cmd, &[self.set.raw()]);
                 dispatch_list(&self.pipelines[0], cmd, &self.volumes, list_header::DYNAMIC);
             }
         }

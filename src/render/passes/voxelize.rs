@@ -6,8 +6,9 @@
 //! occupied voxel to the work list. One pass for static geometry (run once, marks the static
 //! flags) and one for dynamic geometry (every update).
 
-use crate::gpu::{shaders, Access, Bind, Context, DescriptorSet, GpuResult, GraphicsDesc, Pipeline};
-use crate::render::graph::{Pass, Use};
+use crate::gpu::{shaders, Access, Bind, Context, GpuResult, GraphicsDesc, Pipeline};
+use crate::render::binding::{Binds, PassSet};
+use crate::render::graph::Pass;
 use crate::render::scene_gpu::SceneGpu;
 use crate::render::voxel::VoxelVolumes;
 use crate::render::FrameBuffers;
@@ -19,10 +20,9 @@ pub struct Voxelizer {
     pipeline: Pipeline,
     /// With bricked volumes: the same shader marking the bricks the voxels need.
     mark: Option<Pipeline>,
-    set: DescriptorSet,
+    set: PassSet,
     volumes: Arc<VoxelVolumes>,
     scene: Arc<SceneGpu>,
-    frame: FrameBuffers,
 }
 
 impl Voxelizer {
@@ -32,19 +32,24 @@ impl Voxelizer {
         frame: &FrameBuffers,
         volumes: &Arc<VoxelVolumes>,
     ) -> GpuResult<Arc<Self>> {
-        let mut binds = vec![Bind::Uniform(&frame.uniforms), Bind::Storage(&scene.instances)];
-        binds.extend(scene.materials.binds());
-        binds.extend(volumes.binds());
-        binds.push(Bind::Storage(&volumes.list.buffer));
-        binds.push(scene.materials.sampler_bind());
-        binds.push(volumes.brick_maps_bind());
-        binds.push(volumes.sums_bind());
-        let set = DescriptorSet::new(
-            ctx,
-            "voxelize",
-            vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::GEOMETRY | vk::ShaderStageFlags::FRAGMENT,
-            &binds,
-        )?;
+        let (buffer, write) = (Access::GraphicsShaderReadBuffer, Access::FragmentShaderWrite);
+        // The marking run binds everything the voxelization does.
+        let set = Binds::new()
+            .uniform(&frame.uniforms, buffer)
+            .storage(&scene.instances, buffer)
+            .extend(scene.materials.binds())
+            .loaded(Bind::Uniform(&volumes.grid_buffer))
+            .storage_image(volumes.flags_or_placeholder(), write)
+            // Appends every dynamic voxel it gives a first sample to the work list.
+            .storage(&volumes.list.buffer, write)
+            .sampler(scene.materials.sampler.raw)
+            .extend(volumes.brick_maps(write))
+            .extend(volumes.sums_bound(write))
+            .build(
+                ctx,
+                "voxelize",
+                vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::GEOMETRY | vk::ShaderStageFlags::FRAGMENT,
+            )?;
         let hardware_conservative = ctx.info.optional.conservative_rasterization;
         let make = |name: &str, mark: bool| {
             Pipeline::graphics(
@@ -71,20 +76,13 @@ impl Voxelizer {
                         (4, u32::from(mark)),
                     ],
                 },
-                &[set.layout],
+                &[set.layout()],
                 4,
             )
         };
         let pipeline = make("voxelize", false)?;
         let mark = volumes.bricks.is_some().then(|| make("voxelize: mark bricks", true)).transpose()?;
-        Ok(Arc::new(Voxelizer {
-            pipeline,
-            mark,
-            set,
-            volumes: volumes.clone(),
-            scene: scene.clone(),
-            frame: frame.clone(),
-        }))
+        Ok(Arc::new(Voxelizer { pipeline, mark, set, volumes: volumes.clone(), scene: scene.clone() }))
     }
 }
 
@@ -116,16 +114,8 @@ impl Pass for VoxelizePass {
             (false, true) => "mark bricks static",
         }
     }
-    fn uses(&self) -> Vec<Use<'_>> {
-        let v = &self.voxelizer;
-        // The marking run binds (and so declares) everything the voxelization does.
-        let mut uses = v.volumes.brick_map_uses(Access::FragmentShaderWrite);
-        uses.extend(v.volumes.uses(Access::FragmentShaderWrite, Access::FragmentShaderWrite));
-        uses.extend(v.frame.reads(Access::GraphicsShaderReadBuffer));
-        uses.push(v.scene.instance_reads());
-        // Appends every dynamic voxel it gives a first sample to the work list.
-        uses.push(Use::buffer(&v.volumes.list.buffer, Access::FragmentShaderWrite));
-        uses
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.voxelizer.set]
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         let res = self.voxelizer.volumes.grid.resolution;
@@ -137,7 +127,7 @@ impl Pass for VoxelizePass {
         unsafe {
             ctx.device.cmd_begin_rendering(cmd, &info);
             let pipeline = if self.mark { v.mark.as_ref().unwrap_or(&v.pipeline) } else { &v.pipeline };
-            pipeline.bind(cmd, &[v.set.set]);
+            pipeline.bind(cmd, &[v.set.raw()]);
             super::set_viewport(ctx, cmd, extent);
             pipeline.push(cmd, &u32::from(!self.dynamic));
             v.scene.draw_where(ctx, cmd, |d| d.dynamic == self.dynamic);
