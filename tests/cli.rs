@@ -110,6 +110,12 @@ fn info_reports_device_and_queue_topology() {
         ),
         "{out}"
     );
+    // The plan the passes were made from: what exists and which views need which targets.
+    assert!(
+        out.contains("frame plan: ")
+            && out.contains("; lit image (G-buffer, lighting); shadow maps: 6 views, sampled by the direct light\n"),
+        "{out}"
+    );
     // The [gi] table (indented under "  [gi]") names voxel settings; nothing else may.
     let rest: String = out.lines().filter(|l| !l.starts_with("    ")).collect::<Vec<_>>().join("\n");
     assert!(!rest.contains("voxel"), "no voxel passes or volumes without GI:\n{out}");

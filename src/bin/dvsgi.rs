@@ -787,6 +787,7 @@ fn print_scene(common: &CommonArgs, ctx: &std::sync::Arc<Context>, scene: dvsgi:
     let time = scene.settings.time;
     let textures = scene.textures.len();
     let mut renderer = Renderer::new(ctx, scene)?;
+    outln!("  frame plan: {}", renderer.plan().summary().join("; "));
     outln!("  passes (first frame): {}", renderer.pass_names(false).join(" -> "));
     for img in renderer.images() {
         let kind = if img.desc.kind == dvsgi::gpu::ImageKind::D3 { "volume" } else { "image" };

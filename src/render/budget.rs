@@ -5,9 +5,9 @@
 
 use crate::gpu::{Context, GpuError, GpuResult};
 use crate::render::bricks::{self, BrickLayout};
-use crate::render::frame::cone_shadows;
+use crate::render::plan::{FramePlan, RsmPlan};
 use crate::render::voxel::{list_capacity, volume_bytes, VoxelGrid, VoxelNeeds};
-use crate::scene::{GiMode, Scene, View, VoxelLayout};
+use crate::scene::{Scene, VoxelLayout};
 use ash::vk;
 
 /// What a device offers (`DeviceInfo`'s memory figures).
@@ -51,7 +51,7 @@ impl Estimate {
 
     /// `of` with the voxel volumes in `layout` (without copying the scene).
     pub fn of_layout(scene: &Scene, layout: VoxelLayout) -> Estimate {
-        Estimate::sized(scene, layout, &Alloc::texel_bytes)
+        Estimate::sized(scene, &FramePlan::of(scene), layout, &Alloc::texel_bytes)
     }
 
     /// On `ctx`'s device: the voxel volumes by the device's own memory requirements (its
@@ -62,51 +62,41 @@ impl Estimate {
 
     /// `on` with the voxel volumes in `layout`.
     pub fn on_layout(ctx: &Context, scene: &Scene, layout: VoxelLayout) -> Estimate {
-        Estimate::sized(scene, layout, &|a: &Alloc| a.device_bytes(ctx))
+        Estimate::sized(scene, &FramePlan::of(scene), layout, &|a: &Alloc| a.device_bytes(ctx))
     }
 
-    fn sized(scene: &Scene, layout: VoxelLayout, bytes: &dyn Fn(&Alloc) -> u64) -> Estimate {
+    /// `on` for the frame `plan` of `scene` (the renderer's, made once).
+    pub fn on_plan(ctx: &Context, scene: &Scene, plan: &FramePlan) -> Estimate {
+        let layout = scene.settings.gi.voxel_layout;
+        Estimate::sized(scene, plan, layout, &|a: &Alloc| a.device_bytes(ctx))
+    }
+
+    fn sized(scene: &Scene, plan: &FramePlan, layout: VoxelLayout, bytes: &dyn Fn(&Alloc) -> u64) -> Estimate {
         let s = &scene.settings;
-        let shadow_views = crate::render::frame::shadow_map_views(scene);
         let mut e = Estimate::default();
-        let voxel_view = !matches!(s.view, View::Final | View::Indirect | View::Ao);
-        let (iw, ih) = s.internal_size();
+        let (iw, ih) = plan.internal;
         let px = iw as u64 * ih as u64;
         // depth 4 + albedo 4 + normal 8 + specular 4 + emission 8, radiance 16, display 4.
         e.targets = px * (28 + 16 + 4);
         // With moving casters the static casters' maps are cached in a second array.
-        let copies = if crate::render::frame::moving_casters(scene) { 2 } else { 1 };
-        e.shadow_maps =
-            if shadow_views > 0 { copies * 4 * (s.shadow_map_size as u64).pow(2) * shadow_views as u64 } else { 4 };
-        if s.gi.uses_rsm() && !voxel_view {
-            let views = crate::render::lights::rsm_views(scene).len() as u64;
-            if views > 0 {
-                if s.gi.uses_lpv() {
-                    // Ten RGBA32F volumes (light ping-pong and sum, 3 colours each, geometry)
-                    // and the injection's sums (16 ints per cell).
-                    let lpv = 16 * (s.gi.lpv_resolution as u64).pow(3);
-                    e.volumes += 10 * lpv + 4 * lpv;
-                    e.largest_volume = e.largest_volume.max(lpv);
-                }
-                // Flux RGBA32F 16 + normal RGBA16F 8 + position RGBA32F 16 + depth 4 per texel.
-                e.shadow_maps += 44 * (s.gi.rsm_size as u64).pow(2) * views;
-                // The gathered light (RGBA16F) at 1/k, and at full resolution when k > 1; the
-                // mix has the gather's, the lookup's and their sum at 1/k.
-                let k = s.gi.downsample as u64;
-                let low = (iw as u64).div_ceil(k) * (ih as u64).div_ceil(k);
-                let lows = if s.gi.mode == GiMode::RsmLpv { 3 } else { 1 };
-                e.targets += 8 * (lows * low + if k > 1 { px } else { 0 });
-            }
+        let copies = if plan.moving_casters { 2 } else { 1 };
+        let views = plan.shadow_views as u64;
+        e.shadow_maps = if views > 0 { copies * 4 * (s.shadow_map_size as u64).pow(2) * views } else { 4 };
+        // The indirect light's targets (RGBA16F) at 1/k, and at full resolution when k > 1.
+        let (lw, lh) = plan.reduced();
+        let reduced_and_full = lw as u64 * lh as u64 + if plan.downsample > 1 { px } else { 0 };
+        if let Some(rsm) = &plan.rsm {
+            e.add_rsm(s, rsm);
+            // The mix has the gather's, the lookup's and their sum at 1/k.
+            let lows = if rsm.gather && rsm.lpv { 3 } else { 1 };
+            e.targets += 8 * (reduced_and_full + (lows - 1) * lw as u64 * lh as u64);
         }
-        if s.gi.mode == GiMode::Vct || voxel_view {
-            let vols: Vec<u64> = voxel_allocations(scene, layout, bytes).iter().map(bytes).collect();
-            if VoxelNeeds::of(scene).cones && !voxel_view {
-                let specular =
-                    s.gi.specular != crate::scene::SpecularSource::Off && scene.materials.iter().any(|m| m.is_glossy());
-                let per_px = 8 + if specular { 8 } else { 0 } + if cone_shadows(scene) { 4 } else { 0 };
-                let k = s.gi.downsample as u64;
-                let low = (iw as u64).div_ceil(k) * (ih as u64).div_ceil(k);
-                e.targets += per_px * (low + if k > 1 { px } else { 0 });
+        if let Some(needs) = plan.voxels {
+            let vols: Vec<u64> = voxel_allocations(scene, needs, layout, bytes).iter().map(bytes).collect();
+            if plan.cones {
+                // Diffuse, specular and shadow visibility (RGBA8) where they exist.
+                let per_px = 8 + if plan.specular { 8 } else { 0 } + if plan.cone_shadows { 4 } else { 0 };
+                e.targets += per_px * reduced_and_full;
             }
             e.volumes = vols.iter().sum();
             e.largest_volume = vols.iter().copied().max().unwrap_or(0);
@@ -120,6 +110,19 @@ impl Estimate {
         // position + normal + uv (32 B) per vertex, 4 B per index, RGBA8 textures with mips (4/3).
         e.scene = 32 * vertices + 4 * indices + texels * 16 / 3;
         e
+    }
+
+    /// The reflective shadow maps of `rsm`, and their propagation volumes where it has them.
+    fn add_rsm(&mut self, s: &crate::scene::RenderSettings, rsm: &RsmPlan) {
+        if rsm.lpv {
+            // Ten RGBA32F volumes (light ping-pong and sum, 3 colours each, geometry) and the
+            // injection's sums (16 ints per cell).
+            let lpv = 16 * (s.gi.lpv_resolution as u64).pow(3);
+            self.volumes += 10 * lpv + 4 * lpv;
+            self.largest_volume = self.largest_volume.max(lpv);
+        }
+        // Flux RGBA32F 16 + normal RGBA16F 8 + position RGBA32F 16 + depth 4 per texel.
+        self.shadow_maps += 44 * (s.gi.rsm_size as u64).pow(2) * rsm.views.len() as u64;
     }
 
     pub fn total(&self) -> u64 {
@@ -136,7 +139,7 @@ impl Estimate {
     /// `check` against given limits.
     pub fn check_limits(&self, scene: &Scene, info: &Limits) -> GpuResult<()> {
         let gi = &scene.settings.gi;
-        let lpv = gi.uses_lpv() && matches!(scene.settings.view, View::Final | View::Indirect | View::Ao);
+        let lpv = gi.uses_lpv() && scene.settings.view.is_lit();
         let res = if lpv { gi.lpv_resolution } else { gi.voxel_resolution };
         let volumes = match (lpv, gi.voxel_layout) {
             (true, _) => "propagation volumes",
@@ -271,10 +274,14 @@ impl Alloc {
 /// Each allocation of the voxel volumes (`VoxelVolumes::new`): the full-resolution volumes
 /// (N^3, or pools of bricks), the maps, lists and pooled directional levels of the bricked
 /// layout, the work lists, the dense directional mip chains and the placeholders.
-fn voxel_allocations(scene: &Scene, layout: VoxelLayout, bytes: &dyn Fn(&Alloc) -> u64) -> Vec<Alloc> {
+fn voxel_allocations(
+    scene: &Scene,
+    needs: VoxelNeeds,
+    layout: VoxelLayout,
+    bytes: &dyn Fn(&Alloc) -> u64,
+) -> Vec<Alloc> {
     use vk::Format as F;
     let s = &scene.settings;
-    let needs = VoxelNeeds::of(scene);
     let res = s.gi.voxel_resolution;
     let grid = VoxelGrid::for_scene(scene);
     // The pools' slots arranged as `VoxelVolumes::new` arranges them, by the same bytes.
@@ -337,6 +344,7 @@ fn voxel_allocations(scene: &Scene, layout: VoxelLayout, bytes: &dyn Fn(&Alloc) 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::GiMode;
 
     #[test]
     fn voxel_volume_bytes_follow_the_needs() {

@@ -24,13 +24,14 @@ use super::passes::voxel_mips::{VoxelMipPass, VoxelMips};
 use super::passes::voxel_resolve::{Scan, VoxelResolvePass};
 use super::passes::voxel_view::{VoxelMipViewPass, VoxelViewPass};
 use super::passes::voxelize::{VoxelizePass, Voxelizer};
+use super::plan::{FramePlan, RsmPlan};
 use super::rays::{missing_ray_queries, RtReflectPass, SceneRays, TopLevelBuildPass};
 use super::reuse::InputsSeen;
 use super::scene_gpu::SceneGpu;
-use super::voxel::VoxelVolumes;
+use super::voxel::{VoxelNeeds, VoxelVolumes};
 use super::FrameBuffers;
 use crate::gpu::{Buffer, Context, GpuResult, Image, ImageDesc};
-use crate::scene::{DirectShadows, GiMode, RenderSettings, Scene, SpecularSource, View, VoxelOcclusion};
+use crate::scene::{DirectShadows, GiMode, RenderSettings, Scene, SpecularSource, View};
 use ash::vk;
 use std::cell::{Cell, RefCell};
 use std::sync::Arc;
@@ -62,10 +63,10 @@ impl VoxelPasses {
         scene: &Scene,
         scene_gpu: &Arc<SceneGpu>,
         frame: &FrameBuffers,
-        atlas: &Arc<Image>,
+        (atlas, needs): (&Arc<Image>, VoxelNeeds),
     ) -> GpuResult<VoxelPasses> {
         let s = &scene.settings;
-        let volumes = Arc::new(VoxelVolumes::new(ctx, scene)?);
+        let volumes = Arc::new(VoxelVolumes::new(ctx, scene, needs)?);
         let voxelizer = Voxelizer::new(ctx, scene_gpu, frame, &volumes)?;
         let keeper = ListKeeper::new(ctx, &volumes)?;
         // One scan (glsl/scan.comp) for the static work list and every brick allocation.
@@ -200,22 +201,14 @@ pub struct RayPasses {
 }
 
 impl RayPasses {
-    /// Where the frame traces rays (`gi.specular = "rt"` with cones to trace and some glossy
-    /// material, or `gi.shadows = "rt"`): the scene's structures, built now.
-    fn new(ctx: &Arc<Context>, scene: &Scene, scene_gpu: &SceneGpu, cones: bool) -> GpuResult<Option<RayPasses>> {
-        let s = &scene.settings;
-        let reflections = cones && s.gi.specular == SpecularSource::Rt && glossy(scene);
-        if !reflections && !rt_shadows(scene) {
+    /// Where the frame traces rays (`FramePlan::rays`): the scene's structures, built now.
+    fn new(ctx: &Arc<Context>, scene: &Scene, scene_gpu: &SceneGpu, plan: &FramePlan) -> GpuResult<Option<RayPasses>> {
+        if !plan.rays() {
             return Ok(None);
         }
-        let rays = Arc::new(SceneRays::new(ctx, scene, scene_gpu, s.time)?);
+        let rays = Arc::new(SceneRays::new(ctx, scene, scene_gpu, scene.settings.time)?);
         Ok(Some(RayPasses { build: rays.dynamic.then(|| TopLevelBuildPass::new(&rays)), scene: rays }))
     }
-}
-
-/// Some material reflects specularly.
-fn glossy(scene: &Scene) -> bool {
-    scene.materials.iter().any(|m| m.specular.max_element() > 0.0)
 }
 
 impl ConePasses {
@@ -223,7 +216,7 @@ impl ConePasses {
     #[allow(clippy::too_many_arguments)]
     fn new(
         ctx: &Arc<Context>,
-        scene: &Scene,
+        (scene, plan): (&Scene, &FramePlan),
         scene_gpu: &Arc<SceneGpu>,
         frame: &FrameBuffers,
         gbuffer: &Arc<GBuffer>,
@@ -232,12 +225,10 @@ impl ConePasses {
         rays: Option<&Arc<SceneRays>>,
     ) -> GpuResult<ConePasses> {
         let s = &scene.settings;
-        let (width, height) = s.internal_size();
-        let specular = s.gi.specular != SpecularSource::Off && glossy(scene);
-        let rt = specular && s.gi.specular == SpecularSource::Rt;
-        let cone_shadows = cone_shadows(scene);
-        let k = s.gi.downsample;
-        let (lw, lh) = (width.div_ceil(k), height.div_ceil(k));
+        let (width, height) = plan.internal;
+        let (specular, rt, cone_shadows) = (plan.specular, plan.rt_reflections, plan.cone_shadows);
+        let k = plan.downsample;
+        let (lw, lh) = plan.reduced();
         let label = if k > 1 { format!(" (1/{k})") } else { String::new() };
         let low = GiTargets::new(ctx, &label, lw, lh, specular, cone_shadows)?;
         let upsample = if k > 1 {
@@ -349,25 +340,21 @@ pub struct RsmPasses {
 }
 
 impl RsmPasses {
-    /// `None` when no light casts shadows: no maps, no indirect light.
+    /// The maps of `rsm`'s views, their gather or volume, the sum and the upsample.
     fn new(
         ctx: &Arc<Context>,
-        scene: &Scene,
+        (scene, plan, rsm): (&Scene, &FramePlan, &RsmPlan),
         scene_gpu: &Arc<SceneGpu>,
         frame: &FrameBuffers,
         gbuffer: &Arc<GBuffer>,
         placeholders: &Arc<GiPlaceholders>,
-    ) -> GpuResult<Option<RsmPasses>> {
-        let views = crate::render::lights::rsm_views(scene);
-        if views.is_empty() {
-            return Ok(None);
-        }
+    ) -> GpuResult<RsmPasses> {
         let gi = &scene.settings.gi;
-        let maps = Arc::new(RsmMaps::new(ctx, gi.rsm_size, views)?);
+        let maps = Arc::new(RsmMaps::new(ctx, gi.rsm_size, rsm.views.clone())?);
         let params = Buffer::uniform(ctx, "rsm gi params", &crate::render::cones::GpuGiParams::new(gi, 1, 1.0, 1))?;
-        let (width, height) = scene.settings.internal_size();
-        let k = gi.downsample;
-        let (lw, lh) = (width.div_ceil(k), height.div_ceil(k));
+        let (width, height) = plan.internal;
+        let k = plan.downsample;
+        let (lw, lh) = plan.reduced();
         let low = |what: &str| {
             let label = if k > 1 { format!(" ({what}, 1/{k})") } else { format!(" ({what})") };
             GiTargets::new(ctx, &label, lw, lh, false, false)
@@ -375,13 +362,13 @@ impl RsmPasses {
         let mix = gi.mode == GiMode::RsmLpv;
         let grid = crate::render::lpv::grid(scene);
         let split = crate::render::lpv::MIX_SPLIT_CELLS;
-        let lpv = if gi.uses_lpv() {
+        let lpv = if rsm.lpv {
             let low = low("lpv")?;
             Some(LpvPasses::new(ctx, scene, frame, gbuffer, &maps, &params, low)?)
         } else {
             None
         };
-        let gather = if gi.gathers_rsm() {
+        let gather = if rsm.gather {
             let near = if mix { split as f32 * grid.voxel_size } else { 0.0 };
             Some(RsmGatherPass::new(ctx, frame, gbuffer, &maps, &params, low("rsm")?, gi, near)?)
         } else {
@@ -404,7 +391,7 @@ impl RsmPasses {
             let up = GiUpsamplePass::new(ctx, frame, gbuffer, &passes.params, passes.low(), full, placeholders)?;
             passes.upsample = Some(up);
         }
-        Ok(Some(passes))
+        Ok(passes)
     }
 
     /// Plan the next frame: the maps are drawn (and the volume injected and propagated) when
@@ -505,7 +492,7 @@ impl Shading {
             (Some(v), View::VoxelMip) => {
                 Shading::MipView(VoxelMipViewPass::new(ctx, frame, &v.volumes, s.view_lod, s.view_direction, radiance)?)
             }
-            (Some(v), view) if !matches!(view, View::Final | View::Indirect | View::Ao) => {
+            (Some(v), view) if !view.is_lit() => {
                 Shading::VoxelView(VoxelViewPass::new(ctx, frame, &v.volumes, view, radiance)?)
             }
             _ => Shading::Lighting(LightingPass::new(ctx, frame, lit, LightingOutput::of(s.view))?),
@@ -539,6 +526,8 @@ pub struct FramePasses {
     pub tonemap: TonemapPass,
     /// Created on the first frame whose output is read back (not for benchmarks).
     pub readback: Option<ReadbackPasses>,
+    /// What the frame needs, which these passes are made of.
+    pub plan: FramePlan,
     /// The frame's 2D targets: G-buffer, shadow maps (or their placeholder), radiance, display,
     /// and the ray-traced shadows' visibility where it exists.
     pub targets: Vec<Arc<Image>>,
@@ -591,33 +580,30 @@ pub const RADIANCE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub const SHADOW_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
 impl FramePasses {
+    /// Every pass of `plan`, the frame of `scene`.
     pub fn new(
         ctx: &Arc<Context>,
-        scene: &Scene,
+        (scene, plan): (&Scene, &FramePlan),
         scene_gpu: &Arc<SceneGpu>,
         frame: &FrameBuffers,
-        shadow_views: u32,
     ) -> GpuResult<FramePasses> {
         let s = &scene.settings;
         refuse_rays_without_queries(ctx, s)?;
-        let (width, height) = s.internal_size();
+        let (width, height) = plan.internal;
         let gbuffer = Arc::new(GBuffer::new(ctx, width, height)?);
-        let atlas = shadow_atlas(ctx, s.shadow_map_size, shadow_views)?;
+        let atlas = shadow_atlas(ctx, s.shadow_map_size, plan.shadow_views)?;
         let (radiance, display, resolve) = output_images(ctx, s)?;
         let shown = resolve.as_ref().map_or(&radiance, |r| &r.resolved).clone();
-        let voxel_view = !matches!(s.view, View::Final | View::Indirect | View::Ao);
-        let voxels = if s.gi.mode == GiMode::Vct || voxel_view {
-            Some(VoxelPasses::new(ctx, scene, scene_gpu, frame, &atlas)?)
-        } else {
-            None
+        let voxels = match plan.voxels {
+            Some(needs) => Some(VoxelPasses::new(ctx, scene, scene_gpu, frame, (&atlas, needs))?),
+            None => None,
         };
         let placeholders = Arc::new(GiPlaceholders::new(ctx)?);
-        let cones_traced = matches!(&voxels, Some(v) if v.volumes.needs.cones && !voxel_view);
-        let rays = RayPasses::new(ctx, scene, scene_gpu, cones_traced)?;
-        let cones = match (&voxels, cones_traced) {
+        let rays = RayPasses::new(ctx, scene, scene_gpu, plan)?;
+        let cones = match (&voxels, plan.cones) {
             (Some(v), true) => Some(ConePasses::new(
                 ctx,
-                scene,
+                (scene, plan),
                 scene_gpu,
                 frame,
                 &gbuffer,
@@ -627,14 +613,13 @@ impl FramePasses {
             )?),
             _ => None,
         };
-        let rt_shadow = match (&rays, rt_shadows(scene)) {
+        let rt_shadow = match (&rays, plan.rt_shadows) {
             (Some(r), true) => Some(RtShadowPass::new(ctx, frame, &gbuffer, scene_gpu, &r.scene)?),
             _ => None,
         };
-        let rsm = if s.gi.uses_rsm() && !voxel_view {
-            RsmPasses::new(ctx, scene, scene_gpu, frame, &gbuffer, &placeholders)?
-        } else {
-            None
+        let rsm = match &plan.rsm {
+            Some(r) => Some(RsmPasses::new(ctx, (scene, plan, r), scene_gpu, frame, &gbuffer, &placeholders)?),
+            None => None,
         };
         let lit = LightingInputs {
             gbuffer: &gbuffer,
@@ -645,8 +630,8 @@ impl FramePasses {
             placeholders: &placeholders,
         };
         let shading = Shading::new(ctx, scene, frame, voxels.as_ref(), lit)?;
-        let shadow =
-            (shadow_views > 0).then(|| ShadowMaps::new(ctx, scene_gpu, frame, &atlas, shadow_views)).transpose()?;
+        let views = plan.shadow_views;
+        let shadow = (views > 0).then(|| ShadowMaps::new(ctx, scene_gpu, frame, &atlas, views)).transpose()?;
         let exposure = ExposurePasses::new(ctx, frame, &shown)?;
         let outputs = [&atlas, &radiance, &display, &shown];
         let targets = frame_targets(&gbuffer, outputs, shadow.as_ref(), rt_shadow.as_ref());
@@ -654,7 +639,7 @@ impl FramePasses {
             upload: frame_upload(frame, scene_gpu, rays.as_ref()),
             voxels,
             shadow,
-            direct_shadow_maps: direct_shadow_maps(scene),
+            direct_shadow_maps: plan.direct_shadow_maps,
             gbuffer: GBufferPass::new(ctx, scene_gpu, frame, &gbuffer)?,
             targets,
             rays,
@@ -666,6 +651,7 @@ impl FramePasses {
             exposure,
             resolve,
             readback: None,
+            plan: plan.clone(),
         })
     }
 
@@ -900,48 +886,4 @@ fn refuse_rays_without_queries(ctx: &Context, s: &RenderSettings) -> GpuResult<(
         return Err(missing_ray_queries(ctx, "gi.shadows", "shadow-map"));
     }
     Ok(())
-}
-
-/// The shadow-map views a frame renders: every shadowed light's views where something samples
-/// them (direct light, unless cones or rays shadow every shadowed light; or voxel lighting
-/// with shadow-map occlusion), else 0.
-pub fn shadow_map_views(scene: &Scene) -> u32 {
-    let s = &scene.settings;
-    let voxel_lighting = s.gi.mode == GiMode::Vct || matches!(s.view, View::VoxelRadiance | View::VoxelMip);
-    let voxel_maps = voxel_lighting && s.gi.occlusion == VoxelOcclusion::ShadowMap;
-    if direct_shadow_maps(scene) || voxel_maps {
-        crate::render::lights::shadow_view_count(scene)
-    } else {
-        0
-    }
-}
-
-/// Some object with geometry moves (its transform changes with scene time): its shadow is
-/// drawn over a cache of the static casters' maps (`ShadowMaps`, which finds the same from the
-/// draws; the budget counts the cache from this).
-pub fn moving_casters(scene: &Scene) -> bool {
-    scene.objects.iter().any(|o| !o.motion.is_static() && !o.meshes.is_empty())
-}
-
-/// The direct light samples shadow maps: unless cones or rays shadow every light (they take
-/// the first four).
-fn direct_shadow_maps(scene: &Scene) -> bool {
-    !(cone_shadows(scene) || rt_shadows(scene)) || scene.lights.len() > 4
-}
-
-/// Direct light is shadowed by cones (`gi.shadows = "cone"`, cones traced per pixel).
-pub fn cone_shadows(scene: &Scene) -> bool {
-    let s = &scene.settings;
-    s.gi.mode == GiMode::Vct
-        && s.gi.shadows == DirectShadows::Cone
-        && matches!(s.view, View::Final | View::Indirect | View::Ao)
-}
-
-/// Direct light is shadowed by rays (`gi.shadows = "rt"`, a shadow ray per pixel and light):
-/// only in the final image (the only view that shows direct light) and where one of the first
-/// four lights casts shadows.
-pub fn rt_shadows(scene: &Scene) -> bool {
-    let s = &scene.settings;
-    let shadowed = scene.lights.iter().take(4).any(|l| l.cast_shadows);
-    s.gi.shadows == DirectShadows::Rt && s.view == View::Final && shadowed
 }

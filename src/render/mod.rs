@@ -10,6 +10,7 @@ pub mod graph;
 pub mod lights;
 pub mod lpv;
 pub mod passes;
+pub mod plan;
 pub mod raster_profile;
 pub mod rays;
 pub mod relief;
@@ -26,6 +27,7 @@ use bytemuck::{Pod, Zeroable};
 use frame::{FramePasses, FrameState};
 use gpu_allocator::MemoryLocation;
 use graph::Pass;
+use plan::FramePlan;
 use scene_gpu::SceneGpu;
 pub use schedule::{FrameTiming, HostWaits, Mode, PassTime, Scheduler, SerialTime, SubmitRecord};
 use std::sync::Arc;
@@ -175,9 +177,9 @@ impl Renderer {
             )));
         }
         let shadow_views = lights::shadow_view_count(&scene);
-        let map_views = frame::shadow_map_views(&scene);
+        let plan = FramePlan::of(&scene);
         // Refuse what cannot fit before allocating anything.
-        budget::Estimate::on(ctx, &scene).check(ctx, &scene)?;
+        budget::Estimate::on_plan(ctx, &scene, &plan).check(ctx, &scene)?;
         let scene_gpu = Arc::new(SceneGpu::new(ctx, &scene)?);
         let frame_buffers = FrameBuffers {
             uniforms: Buffer::new(
@@ -205,7 +207,7 @@ impl Renderer {
             )?
             .into(),
         };
-        let passes = FramePasses::new(ctx, &scene, &scene_gpu, &frame_buffers, map_views)?;
+        let passes = FramePasses::new(ctx, (&scene, &plan), &scene_gpu, &frame_buffers)?;
         let scheduler = Scheduler::new(ctx, options.mode, options.frames_in_flight)?;
         let radiance_scale = lights::radiance_scale(&scene);
         Ok(Renderer {
@@ -245,6 +247,11 @@ impl Renderer {
 
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
+    }
+
+    /// What the scene's frame needs (decided once, when the renderer was made).
+    pub fn plan(&self) -> &FramePlan {
+        &self.passes.plan
     }
 
     /// Names of the passes the next frame runs, in order.

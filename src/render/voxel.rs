@@ -6,7 +6,7 @@ use crate::gpu::{Access, Buffer, Context, GpuError, GpuResult, Image, ImageDesc,
 use crate::render::binding::Binds;
 use crate::render::bricks::{BrickLayout, Bricks, FullImages, BRICK, MAX_POOLS};
 use crate::render::cones::GpuGiParams;
-use crate::scene::{Aabb, GiMode, GiSettings, Scene, View, VoxelLayout};
+use crate::scene::{Aabb, GiSettings, Scene, View, VoxelLayout};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -94,18 +94,14 @@ impl VoxelNeeds {
         FullImages { words, bytes: u32::from(self.dynamic), scratch: self.bounces > 0 }
     }
 
-    pub fn of(scene: &Scene) -> VoxelNeeds {
-        let s = &scene.settings;
-        let cones = match s.view {
-            View::Final | View::Indirect | View::Ao => s.gi.mode == GiMode::Vct,
-            View::VoxelMip => true,
-            View::VoxelAlbedo | View::VoxelNormal | View::VoxelEmission | View::VoxelRadiance => false,
-        };
+    /// The scene's voxels; `cones`: cones are traced through them (per pixel, or by the mip
+    /// view), so they have directional volumes and bounce light.
+    pub fn of(scene: &Scene, cones: bool) -> VoxelNeeds {
         VoxelNeeds {
             emission: scene.materials.iter().any(|m| m.is_emissive()),
             dynamic: scene.objects.iter().any(|o| o.dynamic),
             cones,
-            bounces: if cones { s.gi.bounces } else { 0 },
+            bounces: if cones { scene.settings.gi.bounces } else { 0 },
         }
     }
 }
@@ -356,10 +352,9 @@ impl VoxelList {
 }
 
 impl VoxelVolumes {
-    pub fn new(ctx: &Arc<Context>, scene: &Scene) -> GpuResult<VoxelVolumes> {
+    pub fn new(ctx: &Arc<Context>, scene: &Scene, needs: VoxelNeeds) -> GpuResult<VoxelVolumes> {
         check_voxel_features(ctx)?;
         let grid = VoxelGrid::for_scene(scene);
-        let needs = VoxelNeeds::of(scene);
         let res = grid.resolution;
         let usage =
             vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC;

@@ -405,6 +405,14 @@ pub enum View {
     Ao,
 }
 
+impl View {
+    /// The view shows the lit image (final, indirect light or AO): a G-buffer, lighting and
+    /// indirect light; the others show the voxels.
+    pub fn is_lit(self) -> bool {
+        matches!(self, View::Final | View::Indirect | View::Ao)
+    }
+}
+
 /// How voxel lighting attenuates light by the voxel's (averaged) normal.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
