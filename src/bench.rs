@@ -108,7 +108,7 @@ pub struct ModeReport {
     /// The voxel layout and what its volumes take after the mode's last frame (absent
     /// without voxels).
     #[serde(default)]
-    pub voxel_memory: Option<crate::render::bricks::VoxelMemory>,
+    pub voxel_memory: Option<crate::render::voxel::bricks::VoxelMemory>,
     /// `--raster-profile`: what the G-buffer's time is made of (absent without it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub raster: Option<RasterReport>,

@@ -437,7 +437,7 @@ fn dynamic_update_clears_old_voxels_and_keeps_static_ones() {
             })
             .collect()
     };
-    let resident = |b: &dvsgi::render::bricks::BrickSnapshot| -> BTreeSet<Voxel> {
+    let resident = |b: &dvsgi::render::voxel::bricks::BrickSnapshot| -> BTreeSet<Voxel> {
         assert_eq!((b.pools.len(), b.pools[0].dropped), (1, 0), "one pool at {RES}^3, nothing dropped");
         b.pools[0].resident.iter().map(|c| (c[0], c[1], c[2])).collect()
     };

@@ -4,9 +4,10 @@
 //! `memory_estimate_matches_what_is_allocated` keeps it within 10% of what is really allocated.
 
 use crate::gpu::{Context, GpuError, GpuResult};
-use crate::render::bricks::{self, BrickLayout};
 use crate::render::plan::{FramePlan, RsmPlan};
-use crate::render::voxel::{list_capacity, volume_bytes, VoxelGrid, VoxelNeeds};
+use crate::render::voxel::bricks::{self, BrickLayout};
+use crate::render::voxel::capacity::Capacity;
+use crate::render::voxel::{volume_bytes, VoxelGrid, VoxelNeeds};
 use crate::scene::{Scene, VoxelLayout};
 use ash::vk;
 
@@ -284,10 +285,11 @@ fn voxel_allocations(
     let s = &scene.settings;
     let res = s.gi.voxel_resolution;
     let grid = VoxelGrid::for_scene(scene);
+    let capacity = Capacity::of(scene, &grid, needs.pooled_levels(layout, res));
     // The pools' slots arranged as `VoxelVolumes::new` arranges them, by the same bytes.
-    let layout = (layout == VoxelLayout::Bricks).then(|| {
+    let layout = (!capacity.bricks.is_empty()).then(|| {
         let image_bytes = |f, e, sampled| bytes(&Alloc::volume(f, e, 1, sampled));
-        BrickLayout::for_scene(scene, &grid, needs.cones).fit(needs.full_images(), &image_bytes)
+        BrickLayout::sized(res, &capacity.bricks).fit(needs.full_images(), &image_bytes)
     });
     // Each full-resolution volume: N^3, or its pool of bricks (8^3 per slot; the radiance
     // volumes 9^3, with their apron).
@@ -314,7 +316,7 @@ fn voxel_allocations(
         // The maps (R32_UINT per brick), the resident-brick lists, and the pooled
         // directional levels (six RGBA16F volumes each).
         vols.extend(l.pools.iter().map(|p| Alloc::volume(F::R32_UINT, [p.map_side; 3], 1, false)));
-        let lists = bricks::list_header::SIZE + 4 * l.pools.iter().map(|p| u64::from(p.capacity)).sum::<u64>();
+        let lists = bricks::brick_list_header::SIZE + 4 * l.pools.iter().map(|p| u64::from(p.capacity)).sum::<u64>();
         vols.push(Alloc::Buffer(lists));
         if needs.cones {
             vols.extend(l.pools[1..].iter().flat_map(|p| [Alloc::volume(rgba16, p.extent(), 1, true); 6]));
@@ -322,10 +324,9 @@ fn voxel_allocations(
     }
     // The work list of occupied voxels (a 64-byte header and 4 bytes per voxel the
     // triangles can occupy), and with dynamic objects the stale list.
-    let capacity = list_capacity(scene, &grid);
-    vols.push(Alloc::Buffer(64 + 4 * capacity));
+    vols.push(Alloc::Buffer(64 + 4 * capacity.list));
     if needs.dynamic {
-        vols.push(Alloc::Buffer(4 * capacity.max(1)));
+        vols.push(Alloc::Buffer(4 * capacity.list.max(1)));
     }
     if needs.cones {
         // Six RGBA16F volumes at half resolution with full mip chains (the levels that are

@@ -14,7 +14,7 @@ use super::passes::rsm::{RsmGatherPass, RsmMaps, RsmPass};
 use super::passes::rt_shadow::RtShadowPass;
 use super::passes::shadow::ShadowMaps;
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
-use super::passes::upload::UploadPass;
+use super::passes::upload::{UploadPass, Uploads};
 use super::passes::voxel_bounce::{BounceComposePass, VoxelBouncePass};
 use super::passes::voxel_bricks::{BrickClearPass, BrickListPass};
 use super::passes::voxel_clear::{DynamicClearPass, VoxelClearPass};
@@ -528,29 +528,39 @@ pub struct FramePasses {
     pub readback: Option<ReadbackPasses>,
     /// What the frame needs, which these passes are made of.
     pub plan: FramePlan,
-    /// The frame's 2D targets: G-buffer, shadow maps (or their placeholder), radiance, display,
-    /// and the ray-traced shadows' visibility where it exists.
-    pub targets: Vec<Arc<Image>>,
+    /// The frame's 2D targets.
+    pub targets: FrameTargets,
 }
 
-/// The frame's 2D targets (`FramePasses::targets`): the G-buffer, then the shadow atlas,
-/// radiance, display and shown images (`outputs`; the shown one where it is not the radiance),
-/// the static casters' shadow cache and the ray-traced shadows' visibility where they exist.
-fn frame_targets(
-    gbuffer: &GBuffer,
-    outputs: [&Arc<Image>; 4],
-    shadow: Option<&ShadowMaps>,
-    rt_shadow: Option<&RtShadowPass>,
-) -> Vec<Arc<Image>> {
-    let [atlas, radiance, display, shown] = outputs;
-    [&gbuffer.depth, &gbuffer.albedo, &gbuffer.normal, &gbuffer.specular, &gbuffer.emission]
-        .into_iter()
-        .chain([atlas, radiance, display])
-        .chain(shadow.and_then(|s| s.cached.as_ref()).map(|c| &c.cache))
-        .chain((!Arc::ptr_eq(shown, radiance)).then_some(shown))
-        .chain(rt_shadow.map(|r| &r.visibility))
-        .cloned()
-        .collect()
+/// The frame's 2D targets, by name (for memory reports: `Renderer::all_images`).
+pub struct FrameTargets {
+    pub gbuffer: Arc<GBuffer>,
+    /// The shadow maps (or their 1x1 placeholder).
+    pub shadow_atlas: Arc<Image>,
+    /// The shaded radiance, at the internal size.
+    pub radiance: Arc<Image>,
+    /// The tone-mapped image, at the output size.
+    pub display: Arc<Image>,
+    /// With supersampling: the radiance resolved to the output size.
+    pub resolved: Option<Arc<Image>>,
+    /// With moving casters: the static casters' shadow maps.
+    pub shadow_cache: Option<Arc<Image>>,
+    /// With `gi.shadows = "rt"`: the shadow rays' visibility.
+    pub rt_visibility: Option<Arc<Image>>,
+}
+
+impl FrameTargets {
+    /// Every target that exists: the G-buffer, the shadow atlas, radiance and display, the
+    /// shadow cache, the resolved radiance and the rays' visibility.
+    pub fn all(&self) -> Vec<&Arc<Image>> {
+        let g = &self.gbuffer;
+        [&g.depth, &g.albedo, &g.normal, &g.specular, &g.emission, &self.shadow_atlas, &self.radiance, &self.display]
+            .into_iter()
+            .chain(&self.shadow_cache)
+            .chain(&self.resolved)
+            .chain(&self.rt_visibility)
+            .collect()
+    }
 }
 
 /// What differs from frame to frame.
@@ -633,8 +643,15 @@ impl FramePasses {
         let views = plan.shadow_views;
         let shadow = (views > 0).then(|| ShadowMaps::new(ctx, scene_gpu, frame, &atlas, views)).transpose()?;
         let exposure = ExposurePasses::new(ctx, frame, &shown)?;
-        let outputs = [&atlas, &radiance, &display, &shown];
-        let targets = frame_targets(&gbuffer, outputs, shadow.as_ref(), rt_shadow.as_ref());
+        let targets = FrameTargets {
+            gbuffer: gbuffer.clone(),
+            shadow_atlas: atlas.clone(),
+            radiance: radiance.clone(),
+            display: display.clone(),
+            resolved: resolve.as_ref().map(|r| r.resolved.clone()),
+            shadow_cache: shadow.as_ref().and_then(|s| s.cached.as_ref()).map(|c| c.cache.clone()),
+            rt_visibility: rt_shadow.as_ref().map(|r| r.visibility.clone()),
+        };
         Ok(FramePasses {
             upload: frame_upload(frame, scene_gpu, rays.as_ref()),
             voxels,
@@ -840,12 +857,13 @@ fn output_images(ctx: &Arc<Context>, s: &RenderSettings) -> GpuResult<(Arc<Image
 /// The frame's host data: uniforms, lights, shadow views, instances, and the top level's
 /// instances where rays are traced among moving objects.
 fn frame_upload(frame: &FrameBuffers, scene_gpu: &SceneGpu, rays: Option<&RayPasses>) -> UploadPass {
-    let mut uploads =
-        vec![frame.uniforms.clone(), frame.lights.clone(), frame.shadow_views.clone(), scene_gpu.instances.clone()];
-    if let Some(r) = rays.filter(|r| r.build.is_some()) {
-        uploads.push(r.scene.top.instances.clone());
-    }
-    UploadPass::new(uploads)
+    UploadPass::new(Uploads {
+        uniforms: frame.uniforms.clone(),
+        lights: frame.lights.clone(),
+        shadow_views: frame.shadow_views.clone(),
+        instances: scene_gpu.instances.clone(),
+        top_instances: rays.filter(|r| r.build.is_some()).map(|r| r.scene.top.instances.clone()),
+    })
 }
 
 /// The shadow maps of `views` views of `size`² texels, one layer each (copied to and from: the

@@ -2,7 +2,6 @@
 //! [`frame`]; how barriers are derived is in [`graph`].
 
 pub mod binding;
-pub mod bricks;
 pub mod budget;
 pub mod cones;
 pub mod frame;
@@ -27,11 +26,13 @@ use bytemuck::{Pod, Zeroable};
 use frame::{FramePasses, FrameState};
 use gpu_allocator::MemoryLocation;
 use graph::Pass;
+use passes::upload::Upload;
 use plan::FramePlan;
 use scene_gpu::SceneGpu;
 pub use schedule::{FrameTiming, HostWaits, Mode, PassTime, Scheduler, SerialTime, SubmitRecord};
 use std::sync::Arc;
 use std::time::Instant;
+use voxel::bricks;
 
 /// Mirrors `FrameData` in glsl/include/common.glsl (std140-compatible: vec4/mat4 only).
 #[repr(C)]
@@ -345,7 +346,7 @@ impl Renderer {
     /// Every image of the frame: the 2D targets (G-buffer, shadow maps, radiance, display),
     /// then the voxel volumes and cone-tracing targets (for robustness tests).
     pub fn all_images(&self) -> Vec<Arc<crate::gpu::Image>> {
-        self.passes.targets.iter().cloned().chain(self.images()).collect()
+        self.passes.targets.all().into_iter().cloned().chain(self.images()).collect()
     }
 
     /// Copy an image of this renderer to the host, every layer (waits; for tests and debugging).
@@ -369,7 +370,7 @@ impl Renderer {
         let Some(v) = self.passes.voxels.as_ref().map(|v| v.volumes.clone()) else { return Ok(None) };
         let ctx = self.ctx.clone();
         let list = &v.list;
-        let header = passes::voxel_list::BufferDownload::new(&ctx, &list.buffer, 0, voxel::list_header::SIZE)?;
+        let header = passes::voxel_list::BufferDownload::new(&ctx, &list.buffer, 0, voxel::work_list_header::SIZE)?;
         self.scheduler.begin(None)?;
         self.scheduler.record(&[&header, &passes::readback::HostReadPass { buffers: vec![header.buffer.clone()] }])?;
         self.scheduler.end(true)?;
@@ -378,7 +379,7 @@ impl Renderer {
         let stale_count = u64::from(words[11]).min(list.capacity);
         // The entries in use (and the stale ones), then decode all together.
         let entries =
-            passes::voxel_list::BufferDownload::new(&ctx, &list.buffer, 0, voxel::list_header::SIZE + count * 4)?;
+            passes::voxel_list::BufferDownload::new(&ctx, &list.buffer, 0, voxel::work_list_header::SIZE + count * 4)?;
         let mut downloads = vec![&entries];
         let stale = match &list.stale {
             Some(s) => Some(passes::voxel_list::BufferDownload::new(&ctx, s, 0, stale_count * 4)?),
@@ -578,17 +579,17 @@ impl Renderer {
         let bounds = self.scene.world_bounds(t);
         let (lights, views) = lights::build(&self.scene, t, bounds, s.shadow_map_size, s.shadow_filter_radius);
         let bytes: &[u8] = bytemuck::cast_slice(&lights);
-        upload.set(1, bytes);
+        upload.set(Upload::Lights, bytes);
         let lights_moved = bytes != self.last_lights.as_slice();
         if lights_moved {
             self.lights_changed = true;
             self.last_lights = bytes.to_vec();
         }
-        upload.set(2, bytemuck::cast_slice(&views));
+        upload.set(Upload::ShadowViews, bytemuck::cast_slice(&views));
         let instances = self.scene_gpu.instance_bytes(&self.scene, t);
-        upload.set(3, &instances);
+        upload.set(Upload::Instances, &instances);
         if let Some(r) = self.passes.rays().filter(|r| r.build.is_some()) {
-            upload.set(4, &r.scene.instance_bytes(&self.scene, &self.scene_gpu, t));
+            upload.set(Upload::TopInstances, &r.scene.instance_bytes(&self.scene, &self.scene_gpu, t));
         }
         Written { lights_moved, views, instances }
     }
@@ -638,7 +639,7 @@ impl Renderer {
         // voxels relight depends on the lights just written).
         let interleave = if state.feed_back { self.scene.settings.gi.bounce_interleave } else { 1 };
         self.uniforms.voxel = [self.voxel_updates as u32, interleave, history, frame as u32];
-        self.passes.upload.set(0, bytemuck::bytes_of(&self.uniforms));
+        self.passes.upload.set(Upload::Uniforms, bytemuck::bytes_of(&self.uniforms));
         if state.relight {
             self.voxel_updates += 1;
         }

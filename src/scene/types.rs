@@ -423,7 +423,7 @@ pub enum VoxelAttenuation {
     NDotL,
 }
 
-/// How the voxel volumes are stored (render::bricks, docs/SPARSE.md).
+/// How the voxel volumes are stored (render::voxel::bricks, docs/SPARSE.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum VoxelLayout {

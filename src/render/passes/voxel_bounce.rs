@@ -7,7 +7,7 @@ use super::voxel_list::{dispatch_list, list_arguments, StaleZero};
 use crate::gpu::{shaders, Access, Bind, Context, GpuResult, Image, Pipeline};
 use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, QueueKind, Use};
-use crate::render::voxel::{list_header, VoxelVolumes};
+use crate::render::voxel::{work_list_header, VoxelVolumes};
 use crate::render::FrameBuffers;
 use ash::vk;
 use std::sync::Arc;
@@ -65,7 +65,7 @@ impl Pass for VoxelBouncePass {
     }
     fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
         self.pipeline.bind(cmd, &[self.set.raw()]);
-        dispatch_list(&self.pipeline, cmd, &self.volumes, list_header::OCCUPIED);
+        dispatch_list(&self.pipeline, cmd, &self.volumes, work_list_header::OCCUPIED);
     }
 }
 
@@ -122,6 +122,6 @@ impl Pass for BounceComposePass {
             stale.record(ctx, cmd, &self.volumes);
         }
         self.pipeline.bind(cmd, &[self.set.raw()]);
-        dispatch_list(&self.pipeline, cmd, &self.volumes, list_header::OCCUPIED);
+        dispatch_list(&self.pipeline, cmd, &self.volumes, work_list_header::OCCUPIED);
     }
 }

@@ -5,7 +5,7 @@
 //! empty unless the marking run claims them again), the allocation hands their slots out anew
 //! and the slots are emptied, so the resident set follows moving objects without a host wait.
 //! The pools are sized for the static bricks plus what the moving objects can touch at once
-//! (render::bricks::capacity).
+//! (render::voxel::capacity).
 
 use super::voxel_resolve::Scan;
 use crate::gpu::{shaders, Access, Bind, Context, GpuResult, Pipeline};
@@ -212,7 +212,7 @@ impl Pass for BrickClearPass {
         let lists = &self.volumes.bricks.as_ref().expect("bricks").lists;
         for (p, (pipeline, set)) in self.clears.iter().enumerate() {
             pipeline.bind(cmd, &[set.raw()]);
-            pipeline.dispatch_indirect(cmd, lists, crate::render::bricks::list_header::dynamic_range(p));
+            pipeline.dispatch_indirect(cmd, lists, crate::render::voxel::bricks::brick_list_header::dynamic_range(p));
         }
     }
 }

@@ -6,7 +6,7 @@ use super::voxel_list::{list_arguments, ListKeeper, ListStep};
 use crate::gpu::{shaders, Access, Bind, Context, GpuResult, Pipeline};
 use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, Use};
-use crate::render::voxel::{list_header, VoxelVolumes};
+use crate::render::voxel::{work_list_header, VoxelVolumes};
 use ash::vk;
 use std::sync::Arc;
 
@@ -45,7 +45,7 @@ impl Pass for VoxelClearPass {
             };
         }
         // An empty list: no entries, no groups in any range.
-        unsafe { ctx.device.cmd_fill_buffer(cmd, self.volumes.list.buffer.raw, 0, list_header::SIZE, 0) };
+        unsafe { ctx.device.cmd_fill_buffer(cmd, self.volumes.list.buffer.raw, 0, work_list_header::SIZE, 0) };
         // No totals yet (the brick allocation's finalize reads every pool's).
         unsafe { ctx.device.cmd_fill_buffer(cmd, self.volumes.scan.raw, 0, vk::WHOLE_SIZE, 0) };
         // No resident bricks: every map entry is 0 (cleared above), every pool's list empty.
@@ -100,7 +100,7 @@ impl Pass for DynamicClearPass {
     }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer) {
         self.pipeline.bind(cmd, &[self.set.raw()]);
-        self.pipeline.dispatch_indirect(cmd, &self.volumes.list.buffer, list_header::DYNAMIC);
+        self.pipeline.dispatch_indirect(cmd, &self.volumes.list.buffer, work_list_header::DYNAMIC);
         // The bookkeeping rewrites the arguments the dispatch read and reads what it wrote.
         let dispatched = [Access::IndirectCommandRead, Access::ComputeShaderWrite];
         super::memory_barrier(ctx, cmd, &dispatched, &[Access::ComputeShaderWrite]);

@@ -5,7 +5,7 @@ use super::voxel_list::{dispatch_list, list_arguments, StaleZero};
 use crate::gpu::{shaders, Access, Bind, Context, GpuResult, Image, Pipeline, Sampler};
 use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, QueueKind, Use};
-use crate::render::voxel::{list_header, VoxelVolumes};
+use crate::render::voxel::{work_list_header, VoxelVolumes};
 use crate::render::FrameBuffers;
 use crate::scene::{GiSettings, VoxelAttenuation, VoxelOcclusion};
 use ash::vk;
@@ -87,6 +87,6 @@ impl Pass for VoxelLightPass {
         }
         self.pipeline.bind(cmd, &[self.set.raw()]);
         self.pipeline.push(cmd, &self.softness);
-        dispatch_list(&self.pipeline, cmd, &self.volumes, list_header::OCCUPIED);
+        dispatch_list(&self.pipeline, cmd, &self.volumes, work_list_header::OCCUPIED);
     }
 }

@@ -8,7 +8,7 @@
 use crate::gpu::{shaders, Access, Bind, Buffer, Context, GpuResult, Image, Pipeline};
 use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, Use};
-use crate::render::voxel::{list_header, VoxelVolumes};
+use crate::render::voxel::{work_list_header, VoxelVolumes};
 use ash::vk;
 use std::sync::Arc;
 
@@ -124,7 +124,7 @@ impl StaleZero {
     /// come after (the voxel sets are disjoint, but the target is one resource).
     pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, volumes: &VoxelVolumes) {
         self.pipeline.bind(cmd, &[self.set.raw()]);
-        dispatch_list(&self.pipeline, cmd, volumes, list_header::STALE);
+        dispatch_list(&self.pipeline, cmd, volumes, work_list_header::STALE);
         super::memory_barrier(ctx, cmd, &[Access::ComputeShaderWrite], &[Access::ComputeShaderWrite]);
     }
 }

@@ -7,8 +7,8 @@
 
 use crate::gpu::{shaders, Access, Bind, Context, GpuResult, Image, Pipeline};
 use crate::render::binding::{Binds, PassSet};
-use crate::render::bricks::list_header;
 use crate::render::graph::{Pass, QueueKind, Use};
+use crate::render::voxel::bricks::brick_list_header;
 use crate::render::voxel::VoxelVolumes;
 use ash::vk;
 use std::sync::Arc;
@@ -83,11 +83,11 @@ impl VoxelMips {
             match step.dst {
                 Level::Pooled(p) => {
                     let lists = &v.bricks.as_ref().expect("pooled levels have bricks").lists;
-                    step.pipeline.dispatch_indirect(cmd, lists, list_header::range(p));
+                    step.pipeline.dispatch_indirect(cmd, lists, brick_list_header::range(p));
                     let (apron, set) = step.apron.as_ref().expect("a pooled level has an apron step");
                     super::memory_barrier(ctx, cmd, &[Access::ComputeShaderWrite], &[Access::ComputeShaderWrite]);
                     apron.bind(cmd, &[set.raw()]);
-                    apron.dispatch_indirect(cmd, lists, list_header::range(p));
+                    apron.dispatch_indirect(cmd, lists, brick_list_header::range(p));
                 }
                 Level::Dense(l) => step.pipeline.dispatch(cmd, [v.directional[0].level_size(l); 3], [4; 3]),
             }

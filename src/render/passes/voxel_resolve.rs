@@ -9,7 +9,7 @@ use super::voxel_list::{dispatch_list, list_arguments};
 use crate::gpu::{shaders, Access, Bind, Context, GpuResult, Pipeline};
 use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, Use};
-use crate::render::voxel::{list_header, VoxelVolumes};
+use crate::render::voxel::{work_list_header, VoxelVolumes};
 use ash::vk;
 use std::sync::Arc;
 
@@ -146,7 +146,7 @@ impl Pass for VoxelResolvePass {
             Some(scan) => self.record_static(ctx, cmd, scan),
             None => {
                 self.pipelines[0].bind(cmd, &[self.set.raw()]);
-                dispatch_list(&self.pipelines[0], cmd, &self.volumes, list_header::DYNAMIC);
+                dispatch_list(&self.pipelines[0], cmd, &self.volumes, work_list_header::DYNAMIC);
             }
         }
     }

@@ -13,15 +13,13 @@
 //! by texel, share its slots at 8^3 per slot. Coarser directional levels stay dense.
 //!
 //! The GPU marks bricks while voxelizing and allocates pool slots in a compute pass; the pools
-//! are sized up front by [`BrickLayout::for_scene`], an upper bound from the triangles (a
+//! are sized up front by an upper bound from the triangles (`voxel::capacity`: a
 //! separating-axis test of each triangle against the bricks its box touches), so no
 //! allocation can overflow and the memory estimate is what is allocated.
 
 use crate::gpu::{Buffer, Context, GpuResult, Image, ImageDesc};
-use crate::render::voxel::{VoxelGrid, RADIANCE_VOLUME_FORMAT};
-use crate::scene::Scene;
+use crate::render::voxel::RADIANCE_VOLUME_FORMAT;
 use ash::vk;
-use glam::Vec3;
 use std::sync::Arc;
 
 /// Texels along each side of a brick.
@@ -136,142 +134,19 @@ impl BrickLayout {
         self
     }
 
-    /// The pools for `scene` on `grid`, sized by [`capacity`] (`cones`: the directional
-    /// volumes exist).
-    pub fn for_scene(scene: &Scene, grid: &VoxelGrid, cones: bool) -> BrickLayout {
-        let n = grid.resolution;
-        let levels = if cones { Self::pooled_levels(n) } else { 0 };
-        let caps = capacity(scene, grid, levels);
-        let mut pools = vec![Pool::new(n, true, caps[0])];
-        for l in 0..levels {
-            pools.push(Pool::new((n / 2) >> l, true, caps[l as usize + 1]));
+    /// The pools of a grid of `resolution`, sized by `capacity`: pool 0's bricks, then each
+    /// pooled directional level's ([`Capacity::bricks`](super::capacity::Capacity)).
+    pub fn sized(resolution: u32, capacity: &[u64]) -> BrickLayout {
+        let mut pools = vec![Pool::new(resolution, true, capacity[0])];
+        for (l, &c) in capacity[1..].iter().enumerate() {
+            pools.push(Pool::new((resolution / 2) >> l, true, c));
         }
         BrickLayout { pools }
     }
 }
 
-/// Upper bounds of the resident bricks of each pool: pool 0 (full resolution), then
-/// directional levels 0..levels. A static triangle counts the bricks whose 9^3 texels (apron
-/// included) it touches (the separating-axis test against each brick box of its bounding box,
-/// grown by 1/64 voxel so that the voxelizer's conservative coverage is inside); a moving one
-/// (keyframes), the bricks of a cube as wide as its enclosing sphere, grown by its largest
-/// keyframe scale, wherever it goes ([`crate::render::voxel::list_capacity`]'s rule). A
-/// directional texel is needed by the brick holding it and by the brick whose apron holds it.
-pub fn capacity(scene: &Scene, grid: &VoxelGrid, levels: u32) -> Vec<u64> {
-    let n = grid.resolution;
-    let side0 = n / BRICK;
-    // The occupied bricks (for the directional levels), and pool 0's bricks with their aprons.
-    let mut full = vec![false; (side0 as usize).pow(3)];
-    let mut full_apron = vec![false; (side0 as usize + 1).pow(3)];
-    let mut moving = vec![0u64; levels as usize + 1];
-    let vs = grid.voxel_size.max(f32::MIN_POSITIVE);
-    for o in &scene.objects {
-        let moves = !o.motion.is_static();
-        let m = o.model_matrix(scene.settings.time);
-        let scale = crate::render::voxel::object_max_scale(o);
-        for mesh in o.meshes.iter().filter_map(|&i| scene.meshes.get(i as usize)) {
-            for t in mesh.indices.chunks_exact(3) {
-                let p = [t[0], t[1], t[2]].map(|i| mesh.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO));
-                if moves {
-                    let side = crate::render::voxel::swept_cube_side(p, scale) / vs; // voxels
-                    for (l, count) in moving.iter_mut().enumerate() {
-                        // Texels of this pool's level per voxel, and its bricks per axis.
-                        // Pool 0's apron reaches one voxel further down.
-                        let (texel, apron) = if l == 0 { (1.0, 1.0) } else { ((1u32 << l) as f32, 0.0) };
-                        let bricks = ((side / texel + 2.0 + apron) / BRICK as f32).ceil() as u64 + 1;
-                        *count += bricks.pow(3);
-                    }
-                } else {
-                    let w = p.map(|q| (m.transform_point3(q) - grid.origin) / vs);
-                    mark_triangle_bricks(&mut full, side0, w, 0);
-                    mark_triangle_bricks(&mut full_apron, side0 + 1, w, 1);
-                }
-            }
-        }
-    }
-    let mut caps = vec![full_apron.iter().filter(|&&b| b).count() as u64 + moving[0]];
-    for l in 0..levels {
-        caps.push(directional_bricks(&full, side0, n, l) + moving[l as usize + 1]);
-    }
-    caps
-}
-
-/// Mark the bricks (of `side`^3) that triangle `w` (voxel units) touches; with `apron` 1, a
-/// brick b spans voxels 8b - 1 .. 8b + 8 (its apron below it included).
-fn mark_triangle_bricks(bricks: &mut [bool], side: u32, w: [Vec3; 3], apron: u32) {
-    let b = BRICK as f32;
-    let a = apron as f32;
-    let lo = (w[0].min(w[1]).min(w[2]) / b).floor().max(Vec3::ZERO);
-    let hi = ((w[0].max(w[1]).max(w[2]) + a) / b).floor().min(Vec3::splat(side as f32 - 1.0));
-    if lo.cmpgt(hi).any() {
-        return;
-    }
-    let grow = 1.0 / 64.0;
-    for z in lo.z as u32..=hi.z as u32 {
-        for y in lo.y as u32..=hi.y as u32 {
-            for x in lo.x as u32..=hi.x as u32 {
-                let i = (x + side * (y + side * z)) as usize;
-                if bricks[i] {
-                    continue;
-                }
-                let centre = (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * b - 0.5 * a;
-                if triangle_box_overlap(centre, Vec3::splat((b + a) * 0.5 + grow), w) {
-                    bricks[i] = true;
-                }
-            }
-        }
-    }
-}
-
-/// Bricks of directional level `l` that a full-resolution brick set can make non-empty: the
-/// texels under each full-resolution brick, each in its own brick and in the apron of the
-/// next brick up on each axis.
-fn directional_bricks(full: &[bool], side0: u32, n: u32, l: u32) -> u64 {
-    let level_side = (n / 2) >> l;
-    let map_side = level_side / BRICK + 1;
-    let mut set = vec![false; (map_side as usize).pow(3)];
-    let shift = l + 1; // full-resolution voxels per texel: 2^shift
-    for (i, _) in full.iter().enumerate().filter(|(_, &b)| b) {
-        let i = i as u32;
-        let b = [i % side0, (i / side0) % side0, i / (side0 * side0)];
-        // Texels lo..=hi under the brick, then the bricks of lo..=hi+1.
-        let range = b.map(|c| ((c * BRICK) >> shift, (((c * BRICK + BRICK - 1) >> shift) + 1) / BRICK));
-        let first = range.map(|(lo, _)| lo / BRICK);
-        for z in first[2]..=range[2].1.min(map_side - 1) {
-            for y in first[1]..=range[1].1.min(map_side - 1) {
-                for x in first[0]..=range[0].1.min(map_side - 1) {
-                    set[(x + map_side * (y + map_side * z)) as usize] = true;
-                }
-            }
-        }
-    }
-    set.iter().filter(|&&b| b).count() as u64
-}
-
-/// Separating-axis test of a triangle against the box at `c` with half size `h` (touching
-/// counts), as glsl/include/voxel.glsl's.
-pub fn triangle_box_overlap(c: Vec3, h: Vec3, t: [Vec3; 3]) -> bool {
-    let v = t.map(|p| p - c);
-    let e = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
-    let separates = |axis: Vec3| {
-        let len2 = axis.length_squared();
-        if len2 < 1e-20 {
-            return false;
-        }
-        let p = v.map(|q| axis.dot(q));
-        let r = h.dot(axis.abs());
-        let eps = 1e-5 * (r + 1e-3 * len2.sqrt());
-        p[0].min(p[1]).min(p[2]) > r + eps || p[0].max(p[1]).max(p[2]) < -r - eps
-    };
-    let axes = [Vec3::X, Vec3::Y, Vec3::Z];
-    if axes.iter().any(|&a| separates(a)) || separates(e[0].cross(e[1])) {
-        return false;
-    }
-    !e.iter().any(|ei| axes.iter().any(|&a| separates(ei.cross(a))))
-}
-
 /// Byte offsets of the brick lists' header (`BrickListBlock` in glsl/include/brick_list.glsl).
-pub mod list_header {
+pub mod brick_list_header {
     /// Per pool: a `VkDispatchIndirectCommand` over its resident bricks and their count.
     pub fn range(pool: usize) -> u64 {
         16 * pool as u64
@@ -344,7 +219,7 @@ impl Bricks {
         let lists = Arc::new(Buffer::new(
             ctx,
             "voxel brick lists",
-            list_header::SIZE + 4 * entries,
+            brick_list_header::SIZE + 4 * entries,
             usage,
             gpu_allocator::MemoryLocation::GpuOnly,
         )?);
@@ -353,12 +228,12 @@ impl Bricks {
 
     /// The lists' header with nothing resident: where each pool's entries start and how many
     /// it may hold (`BrickListBlock`).
-    pub fn empty_header(&self) -> [u32; list_header::SIZE as usize / 4] {
-        let mut h = [0u32; list_header::SIZE as usize / 4];
+    pub fn empty_header(&self) -> [u32; brick_list_header::SIZE as usize / 4] {
+        let mut h = [0u32; brick_list_header::SIZE as usize / 4];
         let mut first = 0;
         for (i, p) in self.layout.pools.iter().enumerate() {
-            h[list_header::FIRST + i] = first;
-            h[list_header::CAPACITY + i] = p.capacity;
+            h[brick_list_header::FIRST + i] = first;
+            h[brick_list_header::CAPACITY + i] = p.capacity;
             first += p.capacity;
         }
         h
@@ -396,10 +271,10 @@ impl BrickSnapshot {
             .enumerate()
             .map(|(i, &pool)| {
                 let count = words[4 * i + 3].min(pool.capacity) as usize;
-                let first = (list_header::SIZE / 4) as usize + words[list_header::FIRST + i] as usize;
+                let first = (brick_list_header::SIZE / 4) as usize + words[brick_list_header::FIRST + i] as usize;
                 let unpack = |w: &u32| [w & 0x3ff, (w >> 10) & 0x3ff, w >> 20];
                 let resident = words[first..first + count].iter().map(unpack).collect();
-                PoolSnapshot { pool, resident, dropped: words[list_header::DROPPED + i] }
+                PoolSnapshot { pool, resident, dropped: words[brick_list_header::DROPPED + i] }
             })
             .collect();
         BrickSnapshot { pools }
@@ -560,40 +435,6 @@ mod tests {
     }
 
     #[test]
-    fn a_full_resolution_brick_needs_the_directional_bricks_of_its_texels_and_aprons() {
-        // Grid 256: level 0 has 128 texels per side, map 17. Full-res brick (1, 0, 0) covers
-        // voxels 8..15 -> texels 4..7 -> bricks 0 and (7 + 1) / 8 = 1 along x; along y and z
-        // brick 0 covers texels 0..3 -> brick 0 only.
-        let side0 = 32;
-        let mut full = vec![false; 32 * 32 * 32];
-        full[1] = true;
-        assert_eq!(directional_bricks(&full, side0, 256, 0), 2);
-        // Brick (0, 0, 0): texels 0..3, brick 0 only.
-        let mut full = vec![false; 32 * 32 * 32];
-        full[0] = true;
-        assert_eq!(directional_bricks(&full, side0, 256, 0), 1);
-    }
-
-    #[test]
-    fn a_triangle_marks_the_bricks_it_crosses() {
-        let side = 4; // a 32^3 grid
-        let mut bricks = vec![false; 64];
-        // A horizontal triangle at y = 4 (inside brick row 0) over x, z in [1, 20].
-        let v = Vec3::new;
-        mark_triangle_bricks(&mut bricks, side, [v(1.0, 4.0, 1.0), v(20.0, 4.0, 1.0), v(1.0, 4.0, 20.0)], 0);
-        let marked: Vec<usize> = (0..64).filter(|&i| bricks[i]).collect();
-        // x, z bricks 0..2 below the diagonal x + z <= 21: (0,0) (1,0) (2,0) (0,1) (1,1) (0,2)
-        // (brick (2,1) starts at x = 16, z = 8: 24 > 21; (1,2): x = 8, z = 16: 24 > 21).
-        let expect: Vec<usize> = [(0, 0), (1, 0), (2, 0), (0, 1), (1, 1), (0, 2)]
-            .iter()
-            .map(|&(x, z)| x + side as usize * side as usize * z)
-            .collect();
-        let mut expect = expect;
-        expect.sort();
-        assert_eq!(marked, expect);
-    }
-
-    #[test]
     fn pools_fit_their_slots_to_what_the_device_pads() {
         // A device that pads every side of a 3D image to a multiple of 16 texels.
         let padded =
@@ -618,24 +459,5 @@ mod tests {
         let texels = |_: vk::Format, e: [u32; 3], _: bool| e.iter().map(|&x| u64::from(x)).product::<u64>();
         let exact = BrickLayout { pools: vec![Pool::new(64, true, 27)] }.fit(full, &texels);
         assert_eq!(exact.pools[0].slots, [3, 3, 3]);
-    }
-
-    #[test]
-    fn a_brick_with_an_apron_is_marked_by_the_last_voxels_of_the_brick_below() {
-        // A 32^3 grid; pool 0's map has 4 + 1 bricks per side. A wall in the plane x = 7.5
-        // fills voxels x = 7, the last of brick 0 along x: brick 1's apron holds them.
-        let v = Vec3::new;
-        let wall = [v(7.5, 1.0, 1.0), v(7.5, 6.0, 1.0), v(7.5, 1.0, 6.0)];
-        let mut plain = vec![false; 64];
-        mark_triangle_bricks(&mut plain, 4, wall, 0);
-        assert_eq!(plain.iter().filter(|&&b| b).count(), 1);
-        let mut apron = vec![false; 125];
-        mark_triangle_bricks(&mut apron, 5, wall, 1);
-        let marked: Vec<usize> = (0..125).filter(|&i| apron[i]).collect();
-        assert_eq!(marked, vec![0, 1], "brick (0, 0, 0) and the one above it along x");
-        // At x = 4.5 (voxel 4, inside brick 0) no apron holds it.
-        let mut apron = vec![false; 125];
-        mark_triangle_bricks(&mut apron, 5, [v(4.5, 1.0, 1.0), v(4.5, 6.0, 1.0), v(4.5, 1.0, 6.0)], 1);
-        assert_eq!((0..125).filter(|&i| apron[i]).collect::<Vec<_>>(), vec![0]);
     }
 }

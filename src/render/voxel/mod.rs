@@ -2,13 +2,17 @@
 //! given, otherwise the world bounds at the scene time grown by 5% (so surfaces on the scene's
 //! boundary are not on the grid's faces). Volumes are created only when the scene needs them.
 
+pub mod bricks;
+pub mod capacity;
+
 use crate::gpu::{Access, Buffer, Context, GpuError, GpuResult, Image, ImageDesc, Sampler};
 use crate::render::binding::Binds;
-use crate::render::bricks::{BrickLayout, Bricks, FullImages, BRICK, MAX_POOLS};
 use crate::render::cones::GpuGiParams;
 use crate::scene::{Aabb, GiSettings, Scene, View, VoxelLayout};
 use ash::vk;
+use bricks::{BrickLayout, Bricks, FullImages, BRICK, MAX_POOLS};
 use bytemuck::{Pod, Zeroable};
+use capacity::Capacity;
 use glam::Vec3;
 use std::sync::Arc;
 
@@ -94,6 +98,13 @@ impl VoxelNeeds {
         FullImages { words, bytes: u32::from(self.dynamic), scratch: self.bounces > 0 }
     }
 
+    /// In the bricked `layout`: the directional levels of a grid of `resolution` kept in pools
+    /// of bricks (none without cones); None with dense volumes.
+    pub fn pooled_levels(&self, layout: VoxelLayout, resolution: u32) -> Option<u32> {
+        let levels = if self.cones { BrickLayout::pooled_levels(resolution) } else { 0 };
+        (layout == VoxelLayout::Bricks).then_some(levels)
+    }
+
     /// The scene's voxels; `cones`: cones are traced through them (per pixel, or by the mip
     /// view), so they have directional volumes and bounce light.
     pub fn of(scene: &Scene, cones: bool) -> VoxelNeeds {
@@ -164,7 +175,7 @@ pub struct VoxelVolumes {
 
 /// Byte offsets of the list header (`VoxelListBlock` in glsl/include/voxel_list.glsl): each
 /// range is a `VkDispatchIndirectCommand` followed by its entry count.
-pub mod list_header {
+pub mod work_list_header {
     /// Every occupied voxel: the voxel light and bounce.
     pub const OCCUPIED: u64 = 0;
     /// The dynamic voxels of the last revoxelization: the dynamic clear.
@@ -186,50 +197,6 @@ pub struct VoxelList {
     pub stale: Option<Arc<Buffer>>,
     /// Entries the list holds ([`list_capacity`]), so no voxelization can overflow it.
     pub capacity: u64,
-}
-
-/// Voxels the scene's triangles can occupy, at most: what the work list must hold. Per
-/// triangle, the voxels its bounding box touches (conservatively: a box touching a voxel's
-/// face counts); for an object with motion, of any box its triangle can have once rotated
-/// and scaled by up to the motion's largest scale (a cube as wide as the triangle's enclosing
-/// sphere, 2/sqrt(3) of its longest edge). Capped at N^3: the list follows the surfaces, not
-/// the grid, and no voxelization can overflow it.
-pub fn list_capacity(scene: &Scene, grid: &VoxelGrid) -> u64 {
-    let n = u64::from(grid.resolution);
-    let vs = grid.voxel_size.max(f32::MIN_POSITIVE);
-    // Voxels along one axis touched by the span [lo, hi] (voxel units), inside the grid.
-    let span = |lo: f32, hi: f32| -> u64 {
-        let (lo, hi) = (lo.max(0.0) - 0.01, hi.min(n as f32) + 0.01);
-        if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
-            return 0;
-        }
-        ((hi.floor() - lo.ceil()) as i64 + 2).clamp(0, n as i64) as u64
-    };
-    let mut total = 0u64;
-    for o in &scene.objects {
-        let moves = !o.motion.is_static();
-        let m = o.model_matrix(scene.settings.time);
-        let scale = object_max_scale(o);
-        for mesh in o.meshes.iter().filter_map(|&i| scene.meshes.get(i as usize)) {
-            for t in mesh.indices.chunks_exact(3) {
-                let p = [t[0], t[1], t[2]].map(|i| mesh.positions.get(i as usize).copied().unwrap_or(Vec3::ZERO));
-                let count = if moves {
-                    let side = (swept_cube_side(p, scale) / vs).min(n as f32);
-                    let axis = ((side + 0.02).floor() as u64 + 2).min(n);
-                    axis.pow(3)
-                } else {
-                    let w = p.map(|q| (m.transform_point3(q) - grid.origin) / vs);
-                    let (lo, hi) = (w[0].min(w[1]).min(w[2]), w[0].max(w[1]).max(w[2]));
-                    span(lo.x, hi.x) * span(lo.y, hi.y) * span(lo.z, hi.z)
-                };
-                total = total.saturating_add(count);
-                if total >= n.pow(3) {
-                    return n.pow(3);
-                }
-            }
-        }
-    }
-    total
 }
 
 /// The fixed-point one of the voxelization's sums (`grid.dims.w`, glsl/include/voxel.glsl):
@@ -306,31 +273,6 @@ impl ScanLayout {
     }
 }
 
-/// The side (object units times `scale`) of a cube that holds triangle `p` however it is
-/// rotated and scaled by up to `scale`: as wide as the enclosing sphere of the triangle,
-/// 2/sqrt(3) of its longest edge.
-pub(crate) fn swept_cube_side(p: [Vec3; 3], scale: f32) -> f32 {
-    let edge = (p[0] - p[1]).length().max((p[1] - p[2]).length()).max((p[2] - p[0]).length());
-    edge * scale * 2.0 / 3f32.sqrt()
-}
-
-/// The largest factor by which an object's model matrix can stretch a length at any time
-/// (its static transform's, times the largest keyframe scale).
-pub(crate) fn object_max_scale(o: &crate::scene::Object) -> f32 {
-    let c = [o.transform.x_axis.truncate(), o.transform.y_axis.truncate(), o.transform.z_axis.truncate()];
-    let len = c.map(|v| v.length());
-    // Translate-rotate-scale (what scene files build) has orthogonal columns: the largest
-    // stretch is the longest column. Otherwise the Frobenius norm bounds it.
-    let tol = 1e-4 * len[0].max(len[1]).max(len[2]).powi(2);
-    let orthogonal = c[0].dot(c[1]).abs() <= tol && c[1].dot(c[2]).abs() <= tol && c[0].dot(c[2]).abs() <= tol;
-    let fixed = if orthogonal { len[0].max(len[1]).max(len[2]) } else { len.map(|l| l * l).iter().sum::<f32>().sqrt() };
-    let motion = match &o.motion {
-        crate::scene::Motion::Keyframes(k) => k.iter().map(|k| k.scale.abs().max_element()).fold(1.0f32, f32::max),
-        _ => 1.0,
-    };
-    fixed * motion
-}
-
 impl VoxelList {
     fn new(ctx: &Arc<Context>, capacity: u64, dynamic: bool) -> GpuResult<VoxelList> {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
@@ -338,7 +280,7 @@ impl VoxelList {
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
         let gpu = gpu_allocator::MemoryLocation::GpuOnly;
-        let buffer = Arc::new(Buffer::new(ctx, "voxel list", list_header::SIZE + capacity * 4, usage, gpu)?);
+        let buffer = Arc::new(Buffer::new(ctx, "voxel list", work_list_header::SIZE + capacity * 4, usage, gpu)?);
         let stale = dynamic
             .then(|| Buffer::new(ctx, "voxel stale list", capacity * 4, usage, gpu).map(Arc::new))
             .transpose()?;
@@ -355,11 +297,12 @@ impl VoxelVolumes {
     pub fn new(ctx: &Arc<Context>, scene: &Scene, needs: VoxelNeeds) -> GpuResult<VoxelVolumes> {
         check_voxel_features(ctx)?;
         let grid = VoxelGrid::for_scene(scene);
+        let capacity = Capacity::of(scene, &grid, needs.pooled_levels(scene.settings.gi.voxel_layout, grid.resolution));
         let res = grid.resolution;
         let usage =
             vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC;
         let sampled = usage | vk::ImageUsageFlags::SAMPLED;
-        let bricks = bricks_on(ctx, scene, &grid, &needs)?;
+        let bricks = bricks_on(ctx, &grid, &needs, &capacity)?;
         // Full-resolution volumes: N^3, or the pool of their resident bricks (the integer
         // volumes 8^3 per slot, the sampled radiance volumes 9^3 with their apron).
         let extent = |stride| bricks.as_ref().map_or([res; 3], |b| b.layout.pools[0].extent_at(stride));
@@ -419,7 +362,7 @@ impl VoxelVolumes {
             emission_scale,
             radiance_scale,
             diffuse_rays: scene.settings.gi.diffuse_rays,
-            list: VoxelList::new(ctx, list_capacity(scene, &grid), needs.dynamic)?,
+            list: VoxelList::new(ctx, capacity.list, needs.dynamic)?,
             sums,
             sum_scale,
             scan: scan_buffer(ctx, res, bricks.as_ref())?,
@@ -524,22 +467,22 @@ impl ListSnapshot {
             let i = offset as usize / 4;
             ([words[i], words[i + 1], words[i + 2]], words[i + 3])
         };
-        let (occupied_groups, count) = range(list_header::OCCUPIED);
-        let (dynamic_groups, _) = range(list_header::DYNAMIC);
-        let (stale_groups, stale_count) = range(list_header::STALE);
+        let (occupied_groups, count) = range(work_list_header::OCCUPIED);
+        let (dynamic_groups, _) = range(work_list_header::DYNAMIC);
+        let (stale_groups, stale_count) = range(work_list_header::STALE);
         let unpack = |w: &u32| [w & 0x3ff, (w >> 10) & 0x3ff, (w >> 20) & 0x3ff];
-        let first = list_header::SIZE as usize / 4;
+        let first = work_list_header::SIZE as usize / 4;
         let entries = words[first..].iter().take(count as usize).map(unpack).collect();
         let stale_words: Vec<u32> = bytemuck::pod_collect_to_vec(stale_bytes);
         ListSnapshot {
             resolution,
             occupied_groups,
             entries,
-            static_count: words[list_header::STATIC_COUNT as usize / 4],
+            static_count: words[work_list_header::STATIC_COUNT as usize / 4],
             dynamic_groups,
             stale: stale_words.iter().take(stale_count as usize).map(unpack).collect(),
             stale_groups,
-            dropped: words[list_header::DROPPED as usize / 4],
+            dropped: words[work_list_header::DROPPED as usize / 4],
         }
     }
 
@@ -666,14 +609,19 @@ pub fn volume_bytes(ctx: Option<&Context>, format: vk::Format, extent: [u32; 3],
     crate::gpu::memory::device_image_bytes(ctx, &desc).max(texels)
 }
 
-/// With `gi.voxel_layout = "bricks"`: the maps, pooled levels and lists, each pool's slots
+/// With bricks (`capacity` counts them): the maps, pooled levels and lists, each pool's slots
 /// arranged to take the least of `ctx`'s device memory.
-fn bricks_on(ctx: &Arc<Context>, scene: &Scene, grid: &VoxelGrid, needs: &VoxelNeeds) -> GpuResult<Option<Bricks>> {
-    if scene.settings.gi.voxel_layout != VoxelLayout::Bricks {
+fn bricks_on(
+    ctx: &Arc<Context>,
+    grid: &VoxelGrid,
+    needs: &VoxelNeeds,
+    capacity: &Capacity,
+) -> GpuResult<Option<Bricks>> {
+    if capacity.bricks.is_empty() {
         return Ok(None);
     }
     let image_bytes = |f, e, sampled| volume_bytes(Some(ctx), f, e, 1, sampled);
-    let layout = BrickLayout::for_scene(scene, grid, needs.cones).fit(needs.full_images(), &image_bytes);
+    let layout = BrickLayout::sized(grid.resolution, &capacity.bricks).fit(needs.full_images(), &image_bytes);
     Bricks::new(ctx, layout).map(Some)
 }
 
@@ -731,57 +679,9 @@ mod tests {
     use crate::scene::{Keyframe, Mesh, Motion, Object};
     use glam::Mat4;
 
-    /// The test scene's grid [0, 2]^3 at 8^3 (voxels of 0.25) holding one triangle.
-    fn one_triangle(tri: [Vec3; 3], motion: Motion) -> (Scene, VoxelGrid) {
-        let mut s = crate::render::test_scene(vec![]);
-        s.settings.gi.voxel_resolution = 8;
-        s.meshes.push(Mesh {
-            name: "t".into(),
-            positions: tri.to_vec(),
-            normals: vec![Vec3::Y; 3],
-            uvs: vec![glam::Vec2::ZERO; 3],
-            indices: vec![0, 1, 2],
-            material: 0,
-            bounds: Aabb::EMPTY,
-        });
-        s.objects.push(Object { name: "o".into(), meshes: vec![0], transform: Mat4::IDENTITY, dynamic: true, motion });
-        let g = VoxelGrid::for_scene(&s);
-        (s, g)
-    }
-
-    #[test]
-    fn list_capacity_bounds_the_voxels_a_triangle_can_touch() {
-        let v = Vec3::new;
-        // A horizontal triangle at y = 1.1 over x, z in [0.1, 0.9] (voxels 0..3): 4 x 1 x 4
-        // voxels of its box, plus the neighbours its box touches within 0.01 voxel (none here).
-        let tri = [v(0.1, 1.1, 0.1), v(0.9, 1.1, 0.1), v(0.1, 1.1, 0.9)];
-        let (s, g) = one_triangle(tri, Motion::None);
-        assert_eq!(list_capacity(&s, &g), 4 * 1 * 4);
-        // On a voxel face (y = 1.0) it touches both layers.
-        let (s, g) = one_triangle(tri.map(|p| v(p.x, 1.0, p.z)), Motion::None);
-        assert_eq!(list_capacity(&s, &g), 4 * 2 * 4);
-        // Moving (and scaled up to 2 by a keyframe): a cube as wide as the enclosing sphere of
-        // the triangle twice as large, whatever its orientation: 0.8 * sqrt(2) * 2 * 2/sqrt(3)
-        // = 2.61 m = 10.5 voxels, capped at the 8 voxels of the grid: 8^3.
-        let key = |scale: f32| Keyframe {
-            time: 0.0,
-            translate: Vec3::ZERO,
-            rotate_deg: Vec3::ZERO,
-            scale: Vec3::splat(scale),
-        };
-        let (s, g) = one_triangle(tri, Motion::Keyframes(vec![key(1.0), key(2.0)]));
-        assert_eq!(list_capacity(&s, &g), 512);
-        // At scale 1: 1.31 m = 5.2 voxels, so 7 per axis.
-        let (s, g) = one_triangle(tri, Motion::Keyframes(vec![key(1.0)]));
-        assert_eq!(list_capacity(&s, &g), 7 * 7 * 7);
-        // Outside the grid: nothing.
-        let (s, g) = one_triangle(tri.map(|p| p + Vec3::splat(10.0)), Motion::None);
-        assert_eq!(list_capacity(&s, &g), 0);
-    }
-
     #[test]
     fn a_list_snapshot_decodes_the_header_and_packed_entries() {
-        let mut words = vec![0u32; list_header::SIZE as usize / 4];
+        let mut words = vec![0u32; work_list_header::SIZE as usize / 4];
         words[..4].copy_from_slice(&[1, 1, 1, 2]); // occupied: groups, count
         words[4..8].copy_from_slice(&[1, 1, 1, 1]); // dynamic
         words[8..12].copy_from_slice(&[1, 1, 1, 1]); // stale
