@@ -1,17 +1,63 @@
 //! Descriptor sets that know what they hold. Each binding names its resource and the access the
 //! shaders make of it, once: the set writes the descriptor (the image layout comes from the
 //! access table, `gpu::sync`) and keeps the resource, and a pass's barriers come from its sets
-//! ([`Pass::sets`](super::graph::Pass::sets)) plus the few uses no set can know (attachments,
-//! copies, indirect arguments: [`Pass::unbound`](super::graph::Pass::unbound)).
+//! (`graph::Pass::sets`) plus the few uses no set can know (attachments, copies, indirect
+//! arguments: `graph::Pass::unbound`). This module is what a pass declares; `graph` plans the
+//! barriers from it.
 //!
 //! Data written once at load time and never by a frame (the voxel grid's uniform, the scene's
 //! vertices, materials and textures) is bound with [`Binds::loaded`]: no barrier is ever
 //! needed for it, and the name says so.
 
-use super::graph::Use;
 use crate::gpu::{Access, Bind, Buffer, Context, DescriptorSet, GpuResult, Image};
 use ash::vk;
+use ash::vk::Handle;
 use std::sync::Arc;
+
+/// A resource a pass touches.
+#[derive(Clone, Copy)]
+pub enum Res<'a> {
+    Image(&'a Image),
+    Buffer(&'a Buffer),
+}
+
+impl Res<'_> {
+    pub(super) fn key(&self) -> u64 {
+        match self {
+            Res::Image(i) => i.raw.as_raw(),
+            Res::Buffer(b) => b.raw.as_raw(),
+        }
+    }
+    pub(super) fn name(&self) -> &str {
+        match self {
+            Res::Image(i) => &i.name,
+            Res::Buffer(b) => &b.name,
+        }
+    }
+}
+
+/// One declared use of a resource by a pass.
+#[derive(Clone, Copy)]
+pub struct Use<'a> {
+    pub res: Res<'a>,
+    pub access: Access,
+    /// The pass overwrites the whole resource: previous contents may be discarded.
+    pub discard: bool,
+}
+
+impl<'a> Use<'a> {
+    /// Access an image, keeping its contents.
+    pub fn image(image: &'a Image, access: Access) -> Self {
+        Use { res: Res::Image(image), access, discard: false }
+    }
+    /// Overwrite a whole image: its previous contents are discarded.
+    pub fn overwrite(image: &'a Image, access: Access) -> Self {
+        Use { res: Res::Image(image), access, discard: true }
+    }
+    pub fn buffer(buffer: &'a Buffer, access: Access) -> Self {
+        Use { res: Res::Buffer(buffer), access, discard: false }
+    }
+}
 
 /// A resource a set keeps, with the access its shaders make of it.
 struct Held {

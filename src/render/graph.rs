@@ -2,56 +2,11 @@
 //! declarations (see `gpu::sync`) and wraps each pass in a debug label and GPU timestamps.
 
 use super::binding::PassSet;
+pub use super::binding::{Res, Use};
 use crate::gpu::sync::{access_mask, barrier_from, layout_of, stage_mask, write_mask, writes, Access, Barrier};
-use crate::gpu::{Buffer, Context, Image};
+use crate::gpu::Context;
 use ash::vk;
-use ash::vk::Handle;
 use std::collections::HashMap;
-
-/// A resource a pass touches.
-#[derive(Clone, Copy)]
-pub enum Res<'a> {
-    Image(&'a Image),
-    Buffer(&'a Buffer),
-}
-
-impl Res<'_> {
-    fn key(&self) -> u64 {
-        match self {
-            Res::Image(i) => i.raw.as_raw(),
-            Res::Buffer(b) => b.raw.as_raw(),
-        }
-    }
-    fn name(&self) -> &str {
-        match self {
-            Res::Image(i) => &i.name,
-            Res::Buffer(b) => &b.name,
-        }
-    }
-}
-
-/// One declared use of a resource by a pass.
-#[derive(Clone, Copy)]
-pub struct Use<'a> {
-    pub res: Res<'a>,
-    pub access: Access,
-    /// The pass overwrites the whole resource: previous contents may be discarded.
-    pub discard: bool,
-}
-
-impl<'a> Use<'a> {
-    /// Access an image, keeping its contents.
-    pub fn image(image: &'a Image, access: Access) -> Self {
-        Use { res: Res::Image(image), access, discard: false }
-    }
-    /// Overwrite a whole image: its previous contents are discarded.
-    pub fn overwrite(image: &'a Image, access: Access) -> Self {
-        Use { res: Res::Image(image), access, discard: true }
-    }
-    pub fn buffer(buffer: &'a Buffer, access: Access) -> Self {
-        Use { res: Res::Buffer(buffer), access, discard: false }
-    }
-}
 
 /// A unit of GPU work in the frame.
 pub trait Pass {

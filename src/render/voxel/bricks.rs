@@ -17,8 +17,8 @@
 //! separating-axis test of each triangle against the bricks its box touches), so no
 //! allocation can overflow and the memory estimate is what is allocated.
 
+use super::grid::RADIANCE_VOLUME_FORMAT;
 use crate::gpu::{Buffer, Context, GpuResult, Image, ImageDesc};
-use crate::render::voxel::RADIANCE_VOLUME_FORMAT;
 use ash::vk;
 use std::sync::Arc;
 
@@ -135,7 +135,7 @@ impl BrickLayout {
     }
 
     /// The pools of a grid of `resolution`, sized by `capacity`: pool 0's bricks, then each
-    /// pooled directional level's ([`Capacity::bricks`](super::capacity::Capacity)).
+    /// pooled directional level's (`voxel::capacity::Capacity::bricks`).
     pub fn sized(resolution: u32, capacity: &[u64]) -> BrickLayout {
         let mut pools = vec![Pool::new(resolution, true, capacity[0])];
         for (l, &c) in capacity[1..].iter().enumerate() {

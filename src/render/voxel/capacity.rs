@@ -4,7 +4,7 @@
 //! the same walk (the same triangles, transforms and motion bounds), they cannot disagree.
 
 use super::bricks::BRICK;
-use super::VoxelGrid;
+use super::grid::VoxelGrid;
 use crate::scene::Scene;
 use glam::Vec3;
 
