@@ -63,6 +63,39 @@ fn memory_estimate_matches_what_is_allocated() {
     assert_no_validation_messages(&ctx);
 }
 
+/// The voxel volumes' estimate is exactly what the renderer allocates for them, byte for byte,
+/// in both layouts and with every optional volume (emission, static flags, bounces, pooled
+/// directional levels): the estimate lists the allocations without creating them, and this is
+/// what keeps that list and `VoxelVolumes::new` from drifting apart.
+#[test]
+fn voxel_volume_estimate_is_exactly_what_is_allocated() {
+    let ctx = context();
+    let scenes = [
+        ("scenes/cornell-box.toml", "64", "dense"),
+        ("scenes/cornell-box.toml", "256", "bricks"),
+        ("scenes/dynamic-test.toml", "64", "dense"),
+        ("scenes/dynamic-test.toml", "256", "bricks"),
+        ("scenes/cornell-original.toml", "64", "bricks"),
+    ];
+    for (file, res, layout) in scenes {
+        let layout_value = format!("\"{layout}\"");
+        let overrides = [
+            ("render.width", "16"),
+            ("render.height", "16"),
+            ("gi.voxel_resolution", res),
+            ("gi.voxel_layout", &layout_value),
+        ];
+        let scene = load(&repo().join(file), &overrides);
+        let estimate = Estimate::on(&ctx, &scene).volumes;
+        let r = Renderer::new(&ctx, scene).unwrap();
+        let v = r.voxels().expect("voxels");
+        let images: u64 = v.all().into_iter().chain(&v.flags_placeholder).map(|i| i.bytes).sum();
+        let buffers = v.list.bytes() + v.scan.size + v.bricks.as_ref().map_or(0, |b| b.lists.size);
+        assert_eq!(estimate, images + buffers, "{file} at {res}^3, {layout}");
+    }
+    assert_no_validation_messages(&ctx);
+}
+
 /// A voxel grid whose volumes exceed the device's memory heap is refused before anything is
 /// allocated, naming the heap, the device and a resolution that fits (lavapipe's heap is 2 GiB;
 /// 512^3 with one bounce needs 3.9 GiB).

@@ -643,8 +643,6 @@ fn pool_uniforms(bricks: Option<&Bricks>) -> [[u32; 4]; MAX_POOLS] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Keyframe, Mesh, Motion, Object};
-    use glam::Mat4;
 
     #[test]
     fn a_list_snapshot_decodes_the_header_and_packed_entries() {
