@@ -5,11 +5,10 @@
 
 use crate::gpu::{Context, GpuError, GpuResult};
 use crate::render::plan::{FramePlan, RsmPlan};
-use crate::render::voxel::bricks::{self, BrickLayout};
 use crate::render::voxel::capacity::Capacity;
-use crate::render::voxel::{volume_bytes, VoxelGrid, VoxelNeeds};
+use crate::render::voxel::specs::{Alloc, VolumeSpecs};
+use crate::render::voxel::{fitted_layout, VoxelGrid, VoxelNeeds};
 use crate::scene::{Scene, VoxelLayout};
-use ash::vk;
 
 /// What a device offers (`DeviceInfo`'s memory figures).
 pub struct Limits<'a> {
@@ -52,7 +51,7 @@ impl Estimate {
 
     /// `of` with the voxel volumes in `layout` (without copying the scene).
     pub fn of_layout(scene: &Scene, layout: VoxelLayout) -> Estimate {
-        Estimate::sized(scene, &FramePlan::of(scene), layout, &Alloc::texel_bytes)
+        Estimate::sized(scene, &FramePlan::of(scene), layout, &|a: &Alloc| a.bytes(None))
     }
 
     /// On `ctx`'s device: the voxel volumes by the device's own memory requirements (its
@@ -63,13 +62,13 @@ impl Estimate {
 
     /// `on` with the voxel volumes in `layout`.
     pub fn on_layout(ctx: &Context, scene: &Scene, layout: VoxelLayout) -> Estimate {
-        Estimate::sized(scene, &FramePlan::of(scene), layout, &|a: &Alloc| a.device_bytes(ctx))
+        Estimate::sized(scene, &FramePlan::of(scene), layout, &|a: &Alloc| a.bytes(Some(ctx)))
     }
 
     /// `on` for the frame `plan` of `scene` (the renderer's, made once).
     pub fn on_plan(ctx: &Context, scene: &Scene, plan: &FramePlan) -> Estimate {
         let layout = scene.settings.gi.voxel_layout;
-        Estimate::sized(scene, plan, layout, &|a: &Alloc| a.device_bytes(ctx))
+        Estimate::sized(scene, plan, layout, &|a: &Alloc| a.bytes(Some(ctx)))
     }
 
     fn sized(scene: &Scene, plan: &FramePlan, layout: VoxelLayout, bytes: &dyn Fn(&Alloc) -> u64) -> Estimate {
@@ -242,104 +241,20 @@ fn mib(bytes: u64) -> String {
     }
 }
 
-/// One allocation of the voxel volumes: a buffer of so many bytes, or a 3D image (format,
-/// extent, mip levels, whether it is sampled), whose bytes a device may pad beyond its texels.
-#[derive(Debug, Clone, Copy)]
-enum Alloc {
-    Buffer(u64),
-    Volume { format: vk::Format, extent: [u32; 3], mips: u32, sampled: bool },
-}
-
-impl Alloc {
-    fn volume(format: vk::Format, extent: [u32; 3], mips: u32, sampled: bool) -> Alloc {
-        Alloc::Volume { format, extent, mips, sampled }
-    }
-
-    /// Bytes by the texel count: what any device needs at least.
-    fn texel_bytes(&self) -> u64 {
-        match *self {
-            Alloc::Buffer(bytes) => bytes,
-            Alloc::Volume { format, extent, mips, sampled } => volume_bytes(None, format, extent, mips, sampled),
-        }
-    }
-
-    /// Bytes on `ctx`'s device: an image's memory requirements as the device states them, so
-    /// padding and alignment count (NVIDIA pads 3D images: 12-23% over the texels for the
-    /// brick pools).
-    fn device_bytes(&self, ctx: &Context) -> u64 {
-        let Alloc::Volume { format, extent, mips, sampled } = *self else { return self.texel_bytes() };
-        volume_bytes(Some(ctx), format, extent, mips, sampled)
-    }
-}
-
-/// Each allocation of the voxel volumes (`VoxelVolumes::new`): the full-resolution volumes
-/// (N^3, or pools of bricks), the maps, lists and pooled directional levels of the bricked
-/// layout, the work lists, the dense directional mip chains and the placeholders.
+/// Each allocation of the voxel volumes in `layout`, as `VoxelVolumes::new` makes them
+/// (`voxel::specs`), the pools' slots arranged by the same `bytes`.
 fn voxel_allocations(
     scene: &Scene,
     needs: VoxelNeeds,
     layout: VoxelLayout,
     bytes: &dyn Fn(&Alloc) -> u64,
 ) -> Vec<Alloc> {
-    use vk::Format as F;
-    let s = &scene.settings;
-    let res = s.gi.voxel_resolution;
     let grid = VoxelGrid::for_scene(scene);
+    let res = grid.resolution;
     let capacity = Capacity::of(scene, &grid, needs.pooled_levels(layout, res));
-    // The pools' slots arranged as `VoxelVolumes::new` arranges them, by the same bytes.
-    let layout = (!capacity.bricks.is_empty()).then(|| {
-        let image_bytes = |f, e, sampled| bytes(&Alloc::volume(f, e, 1, sampled));
-        BrickLayout::sized(res, &capacity.bricks).fit(needs.full_images(), &image_bytes)
-    });
-    // Each full-resolution volume: N^3, or its pool of bricks (8^3 per slot; the radiance
-    // volumes 9^3, with their apron).
-    let full = layout.as_ref().map_or([res; 3], |l| l.pools[0].extent_at(bricks::BRICK));
-    let volume = |format, sampled| Alloc::volume(format, full, 1, sampled);
-    let rgba16 = F::R16G16B16A16_SFLOAT;
-    let radiance = Alloc::volume(rgba16, layout.as_ref().map_or([res; 3], |l| l.pools[0].extent()), 1, true);
-    let mut vols = vec![volume(F::R32_UINT, false), volume(F::R32_UINT, false), radiance];
-    if needs.emission {
-        vols.push(volume(F::R32_UINT, false));
-    }
-    // The voxelization's sums (a count, albedo and normal, emission) and the scan over 8^3
-    // bricks that orders the work list.
-    vols.extend((0..crate::render::voxel::sum_words(needs.emission)).map(|_| volume(F::R32_UINT, false)));
-    vols.push(Alloc::Buffer(4 * crate::render::voxel::ScanLayout::new(res, layout.as_ref()).words));
-    if needs.dynamic {
-        vols.push(volume(F::R8_UINT, false));
-    }
-    if needs.bounces > 0 {
-        vols.extend([radiance, volume(rgba16, false)]); // bounced radiance, the bounce's scratch
-    }
-    let pooled = layout.as_ref().map_or(0, |l| l.pools.len() as u32 - 1);
-    if let Some(l) = &layout {
-        // The maps (R32_UINT per brick), the resident-brick lists, and the pooled
-        // directional levels (six RGBA16F volumes each).
-        vols.extend(l.pools.iter().map(|p| Alloc::volume(F::R32_UINT, [p.map_side; 3], 1, false)));
-        let lists = bricks::brick_list_header::SIZE + 4 * l.pools.iter().map(|p| u64::from(p.capacity)).sum::<u64>();
-        vols.push(Alloc::Buffer(lists));
-        if needs.cones {
-            vols.extend(l.pools[1..].iter().flat_map(|p| [Alloc::volume(rgba16, p.extent(), 1, true); 6]));
-        }
-    }
-    // The work list of occupied voxels (a 64-byte header and 4 bytes per voxel the
-    // triangles can occupy), and with dynamic objects the stale list.
-    vols.push(Alloc::Buffer(64 + 4 * capacity.list));
-    if needs.dynamic {
-        vols.push(Alloc::Buffer(4 * capacity.list.max(1)));
-    }
-    if needs.cones {
-        // Six RGBA16F volumes at half resolution with full mip chains (the levels that are
-        // not pooled).
-        let side = (res / 2) >> pooled;
-        vols.extend([Alloc::volume(rgba16, [side; 3], res.trailing_zeros() - pooled, true); 6]);
-    }
-    // The 1x1x1 placeholders bound where a volume does not exist.
-    vols.extend([Alloc::volume(F::R32_UINT, [1; 3], 1, false), Alloc::volume(rgba16, [1; 3], 1, true)]);
-    if !needs.dynamic {
-        vols.push(Alloc::volume(F::R8_UINT, [1; 3], 1, false));
-    }
-    vols
+    let image_bytes = |format, extent, sampled| bytes(&Alloc::Volume { format, extent, mips: 1, sampled });
+    let bricks = fitted_layout(res, &needs, &capacity, &image_bytes);
+    VolumeSpecs::new(res, &needs, capacity.list, bricks.as_ref()).all()
 }
 
 #[cfg(test)]

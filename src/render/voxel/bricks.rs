@@ -18,7 +18,7 @@
 //! allocation can overflow and the memory estimate is what is allocated.
 
 use super::grid::RADIANCE_VOLUME_FORMAT;
-use crate::gpu::{Buffer, Context, GpuResult, Image, ImageDesc};
+use crate::gpu::{Buffer, Image};
 use ash::vk;
 use std::sync::Arc;
 
@@ -178,54 +178,6 @@ pub struct Bricks {
 }
 
 impl Bricks {
-    pub fn new(ctx: &Arc<Context>, layout: BrickLayout) -> GpuResult<Bricks> {
-        let storage =
-            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC;
-        let maps = layout
-            .pools
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                Image::new(
-                    ctx,
-                    &format!("voxel brick map {i}"),
-                    ImageDesc::d3(vk::Format::R32_UINT, p.map_side, 1, storage),
-                )
-                .map(Arc::new)
-            })
-            .collect::<GpuResult<Vec<_>>>()?;
-        let directional = layout.pools[1..]
-            .iter()
-            .enumerate()
-            .map(|(l, p)| {
-                ["+x", "-x", "+y", "-y", "+z", "-z"]
-                    .iter()
-                    .map(|d| {
-                        let desc = ImageDesc::d3_extent(
-                            RADIANCE_VOLUME_FORMAT,
-                            p.extent(),
-                            storage | vk::ImageUsageFlags::SAMPLED,
-                        );
-                        Image::new(ctx, &format!("voxel radiance {d} level {l} bricks"), desc).map(Arc::new)
-                    })
-                    .collect::<GpuResult<Vec<_>>>()
-            })
-            .collect::<GpuResult<Vec<_>>>()?;
-        let entries: u64 = layout.pools.iter().map(|p| u64::from(p.capacity)).sum();
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
-            | vk::BufferUsageFlags::INDIRECT_BUFFER
-            | vk::BufferUsageFlags::TRANSFER_DST
-            | vk::BufferUsageFlags::TRANSFER_SRC;
-        let lists = Arc::new(Buffer::new(
-            ctx,
-            "voxel brick lists",
-            brick_list_header::SIZE + 4 * entries,
-            usage,
-            gpu_allocator::MemoryLocation::GpuOnly,
-        )?);
-        Ok(Bricks { layout, maps, directional, lists })
-    }
-
     /// The lists' header with nothing resident: where each pool's entries start and how many
     /// it may hold (`BrickListBlock`).
     pub fn empty_header(&self) -> [u32; brick_list_header::SIZE as usize / 4] {

@@ -5,6 +5,7 @@
 pub mod bricks;
 pub mod capacity;
 mod grid;
+pub mod specs;
 
 pub use grid::{VoxelGrid, RADIANCE_VOLUME_FORMAT};
 
@@ -13,9 +14,10 @@ use crate::render::binding::Binds;
 use crate::render::cones::GpuGiParams;
 use crate::scene::{GiSettings, Scene, View, VoxelLayout};
 use ash::vk;
-use bricks::{BrickLayout, Bricks, FullImages, BRICK, MAX_POOLS};
+use bricks::{BrickLayout, Bricks, FullImages, MAX_POOLS};
 use bytemuck::{Pod, Zeroable};
 use capacity::Capacity;
+use specs::{Alloc, VolumeSpecs};
 use std::sync::Arc;
 
 /// Mirrors `VoxelGrid` in glsl/include/voxel.glsl.
@@ -182,6 +184,9 @@ pub fn sum_scale(scene: &Scene) -> u32 {
 }
 
 /// What each volume of sums holds (`SUM_COUNT`, `SUM_ALBEDO`... in glsl/include/voxel.glsl).
+/// The six directions of the directional volumes, as their names say them.
+pub const DIRECTIONS: [&str; 6] = ["+x", "-x", "+y", "-y", "+z", "-z"];
+
 const SUM_NAMES: [&str; 10] = [
     "count",
     "albedo r",
@@ -241,15 +246,16 @@ impl ScanLayout {
 }
 
 impl VoxelList {
-    fn new(ctx: &Arc<Context>, capacity: u64, dynamic: bool) -> GpuResult<VoxelList> {
+    /// The lists `specs` sizes, for `capacity` entries.
+    fn new(ctx: &Arc<Context>, specs: &VolumeSpecs, capacity: u64) -> GpuResult<VoxelList> {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::INDIRECT_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
         let gpu = gpu_allocator::MemoryLocation::GpuOnly;
-        let buffer = Arc::new(Buffer::new(ctx, "voxel list", work_list_header::SIZE + capacity * 4, usage, gpu)?);
-        let stale = dynamic
-            .then(|| Buffer::new(ctx, "voxel stale list", capacity * 4, usage, gpu).map(Arc::new))
+        let buffer = Arc::new(Buffer::new(ctx, "voxel list", specs.list.size(), usage, gpu)?);
+        let stale = (specs.stale)
+            .map(|s| Buffer::new(ctx, "voxel stale list", s.size(), usage, gpu).map(Arc::new))
             .transpose()?;
         Ok(VoxelList { buffer, stale, capacity })
     }
@@ -264,34 +270,24 @@ impl VoxelVolumes {
     pub fn new(ctx: &Arc<Context>, scene: &Scene, needs: VoxelNeeds) -> GpuResult<VoxelVolumes> {
         check_voxel_features(ctx)?;
         let grid = VoxelGrid::for_scene(scene);
-        let capacity = Capacity::of(scene, &grid, needs.pooled_levels(scene.settings.gi.voxel_layout, grid.resolution));
         let res = grid.resolution;
-        let usage =
-            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC;
-        let sampled = usage | vk::ImageUsageFlags::SAMPLED;
-        let bricks = bricks_on(ctx, &grid, &needs, &capacity)?;
-        // Full-resolution volumes: N^3, or the pool of their resident bricks (the integer
-        // volumes 8^3 per slot, the sampled radiance volumes 9^3 with their apron).
-        let extent = |stride| bricks.as_ref().map_or([res; 3], |b| b.layout.pools[0].extent_at(stride));
-        let volume = |name: &str, format, usage| {
-            Image::new(ctx, name, ImageDesc::d3_extent(format, extent(BRICK), usage)).map(Arc::new)
-        };
-        let radiance_volume = |name: &str| {
-            let desc = ImageDesc::d3_extent(RADIANCE_VOLUME_FORMAT, extent(BRICK + 1), sampled);
-            Image::new(ctx, name, desc).map(Arc::new)
-        };
+        let capacity = Capacity::of(scene, &grid, needs.pooled_levels(scene.settings.gi.voxel_layout, res));
+        let image_bytes = |f, e, sampled| volume_bytes(Some(ctx), f, e, 1, sampled);
+        let layout = fitted_layout(res, &needs, &capacity, &image_bytes);
+        let specs = VolumeSpecs::new(res, &needs, capacity.list, layout.as_ref());
+        let image = |name: &str, a: &Alloc| Image::new(ctx, name, a.desc()).map(Arc::new);
+        let bricks = layout.map(|l| bricks_of(ctx, l, &specs)).transpose()?;
         let mip_levels = res.trailing_zeros(); // half resolution down to 1 voxel
-        let pooled = bricks.as_ref().map_or(0, |b| b.layout.pools.len() as u32 - 1);
-        let directional = if needs.cones { directional_volumes(ctx, res, pooled, sampled)? } else { Vec::new() };
-        // The bounced radiance and the scratch volume each bounce writes before it is copied in
-        // (read texel by texel: no apron).
-        let bounced = if needs.bounces > 0 {
-            vec![
-                radiance_volume("voxel radiance bounced")?,
-                volume("voxel bounce scratch", RADIANCE_VOLUME_FORMAT, usage)?,
-            ]
-        } else {
-            Vec::new()
+        let directional = match &specs.directional {
+            Some(d) => {
+                DIRECTIONS.iter().map(|dir| image(&format!("voxel radiance {dir}"), d)).collect::<GpuResult<_>>()?
+            }
+            None => Vec::new(),
+        };
+        // The bounced radiance and the scratch volume each bounce writes before it is copied in.
+        let bounced = match &specs.bounced[..] {
+            [b, scratch] => vec![image("voxel radiance bounced", b)?, image("voxel bounce scratch", scratch)?],
+            _ => Vec::new(),
         };
         let (gi_params, bounce_params) = gi_uniforms(ctx, scene, &grid, mip_levels)?;
         let sum_scale = sum_scale(scene);
@@ -302,40 +298,35 @@ impl VoxelVolumes {
             "voxel grid",
             &GpuVoxelGrid::new(&grid, bricks.as_ref(), sum_scale, [emission_scale, radiance_scale]),
         )?;
-        let sums = SUM_NAMES[..sum_words(needs.emission)]
-            .iter()
-            .map(|w| volume(&format!("voxel sum {w}"), vk::Format::R32_UINT, usage))
+        let sums = (SUM_NAMES.iter().zip(&specs.sums))
+            .map(|(w, a)| image(&format!("voxel sum {w}"), a))
             .collect::<GpuResult<Vec<_>>>()?;
-        let placeholder = |name: &str, format, usage| {
-            Image::new(ctx, name, ImageDesc::d3(format, 1, 1, usage | vk::ImageUsageFlags::TRANSFER_DST)).map(Arc::new)
-        };
+        let optional = |name: &str, a: &Option<Alloc>| a.as_ref().map(|a| image(name, a)).transpose();
         Ok(VoxelVolumes {
             grid,
             needs,
             grid_buffer,
-            albedo: volume("voxel albedo", vk::Format::R32_UINT, usage)?,
-            radiance: radiance_volume("voxel radiance")?,
+            albedo: image("voxel albedo", &specs.albedo)?,
+            radiance: image("voxel radiance", &specs.radiance)?,
             bounced,
             directional,
             gi_params,
             bounce_params,
             sampler: volume_sampler(ctx, mip_levels)?,
-            normal: volume("voxel normal", vk::Format::R32_UINT, usage)?,
-            emission: needs.emission.then(|| volume("voxel emission", vk::Format::R32_UINT, usage)).transpose()?,
-            flags: needs.dynamic.then(|| volume("voxel static flags", vk::Format::R8_UINT, usage)).transpose()?,
-            flags_placeholder: (!needs.dynamic)
-                .then(|| placeholder("voxel flags placeholder", vk::Format::R8_UINT, usage))
-                .transpose()?,
+            normal: image("voxel normal", &specs.normal)?,
+            emission: optional("voxel emission", &specs.emission)?,
+            flags: optional("voxel static flags", &specs.flags)?,
+            flags_placeholder: optional("voxel flags placeholder", &specs.flags_placeholder)?,
             emission_scale,
             radiance_scale,
             diffuse_rays: scene.settings.gi.diffuse_rays,
-            list: VoxelList::new(ctx, capacity.list, needs.dynamic)?,
+            list: VoxelList::new(ctx, &specs, capacity.list)?,
             sums,
             sum_scale,
-            scan: scan_buffer(ctx, res, bricks.as_ref())?,
+            scan: scan_buffer(ctx, &specs)?,
             bricks,
-            map_placeholder: placeholder("voxel brick map placeholder", vk::Format::R32_UINT, usage)?,
-            pool_placeholder: placeholder("voxel brick pool placeholder", RADIANCE_VOLUME_FORMAT, sampled)?,
+            map_placeholder: image("voxel brick map placeholder", &specs.map_placeholder)?,
+            pool_placeholder: image("voxel brick pool placeholder", &specs.pool_placeholder)?,
         })
     }
 
@@ -543,23 +534,6 @@ fn check_voxel_features(ctx: &Context) -> GpuResult<()> {
 }
 
 /// The six directional volumes (+x, -x, +y, -y, +z, -z) at half resolution, with the mip
-/// levels from `pooled` on (the levels below are in brick pools).
-fn directional_volumes(
-    ctx: &Arc<Context>,
-    res: u32,
-    pooled: u32,
-    usage: vk::ImageUsageFlags,
-) -> GpuResult<Vec<Arc<Image>>> {
-    let levels = res.trailing_zeros() - pooled;
-    ["+x", "-x", "+y", "-y", "+z", "-z"]
-        .iter()
-        .map(|d| {
-            let desc = ImageDesc::d3(RADIANCE_VOLUME_FORMAT, (res / 2) >> pooled, levels, usage);
-            Image::new(ctx, &format!("voxel radiance {d}"), desc).map(Arc::new)
-        })
-        .collect()
-}
-
 /// Bytes of a voxel volume (`mips` levels of `extent` texels; `sampled`: also sampled, not only
 /// a storage image): by its texels, or on `ctx`'s device as the device states them
 /// (vkGetDeviceImageMemoryRequirements: its padding and alignment), never less than the texels.
@@ -576,27 +550,40 @@ pub fn volume_bytes(ctx: Option<&Context>, format: vk::Format, extent: [u32; 3],
     crate::gpu::memory::device_image_bytes(ctx, &desc).max(texels)
 }
 
-/// With bricks (`capacity` counts them): the maps, pooled levels and lists, each pool's slots
-/// arranged to take the least of `ctx`'s device memory.
-fn bricks_on(
-    ctx: &Arc<Context>,
-    grid: &VoxelGrid,
+/// With bricks (`capacity` counts them): the pools, each one's slots arranged to take the least
+/// memory by `image_bytes(format, extent, sampled)` (a device's, or the texels'). None dense.
+pub fn fitted_layout(
+    resolution: u32,
     needs: &VoxelNeeds,
     capacity: &Capacity,
-) -> GpuResult<Option<Bricks>> {
-    if capacity.bricks.is_empty() {
-        return Ok(None);
-    }
-    let image_bytes = |f, e, sampled| volume_bytes(Some(ctx), f, e, 1, sampled);
-    let layout = BrickLayout::sized(grid.resolution, &capacity.bricks).fit(needs.full_images(), &image_bytes);
-    Bricks::new(ctx, layout).map(Some)
+    image_bytes: &dyn Fn(vk::Format, [u32; 3], bool) -> u64,
+) -> Option<BrickLayout> {
+    (!capacity.bricks.is_empty())
+        .then(|| BrickLayout::sized(resolution, &capacity.bricks).fit(needs.full_images(), image_bytes))
 }
 
-/// The scan buffer ([`ScanLayout`]) for a grid of `res` and its pools of bricks, if any.
-fn scan_buffer(ctx: &Arc<Context>, res: u32, bricks: Option<&Bricks>) -> GpuResult<Arc<Buffer>> {
+/// The maps, pooled levels and lists of `layout`, as `specs` sizes them.
+fn bricks_of(ctx: &Arc<Context>, layout: BrickLayout, specs: &VolumeSpecs) -> GpuResult<Bricks> {
+    let image = |name: String, a: &Alloc| Image::new(ctx, &name, a.desc()).map(Arc::new);
+    let maps = (specs.maps.iter().enumerate())
+        .map(|(i, a)| image(format!("voxel brick map {i}"), a))
+        .collect::<GpuResult<Vec<_>>>()?;
+    let directional = (specs.pooled.iter().enumerate())
+        .map(|(l, a)| DIRECTIONS.iter().map(|d| image(format!("voxel radiance {d} level {l} bricks"), a)).collect())
+        .collect::<GpuResult<Vec<_>>>()?;
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+        | vk::BufferUsageFlags::INDIRECT_BUFFER
+        | vk::BufferUsageFlags::TRANSFER_DST
+        | vk::BufferUsageFlags::TRANSFER_SRC;
+    let size = specs.brick_lists.expect("bricked specs have lists").size();
+    let lists = Buffer::new(ctx, "voxel brick lists", size, usage, gpu_allocator::MemoryLocation::GpuOnly)?;
+    Ok(Bricks { layout, maps, directional, lists: Arc::new(lists) })
+}
+
+/// The scan buffer `specs` sizes ([`ScanLayout`]).
+fn scan_buffer(ctx: &Arc<Context>, specs: &VolumeSpecs) -> GpuResult<Arc<Buffer>> {
     let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
-    let bytes = 4 * ScanLayout::new(res, bricks.map(|b| &b.layout)).words;
-    Buffer::new(ctx, "voxel scan", bytes, usage, gpu_allocator::MemoryLocation::GpuOnly).map(Arc::new)
+    Buffer::new(ctx, "voxel scan", specs.scan.size(), usage, gpu_allocator::MemoryLocation::GpuOnly).map(Arc::new)
 }
 
 /// The cone-tracing parameters of the per-pixel tracer and of the bounce (`gi.bounce_cones`,
