@@ -4,7 +4,7 @@
 //! `memory_estimate_matches_what_is_allocated` keeps it within 10% of what is really allocated.
 
 use crate::gpu::{Context, GpuError, GpuResult};
-use crate::render::plan::{FramePlan, RsmPlan};
+use crate::render::plan::FramePlan;
 use crate::render::voxel::capacity::Capacity;
 use crate::render::voxel::specs::{Alloc, VolumeSpecs};
 use crate::render::voxel::{fitted_layout, VoxelGrid, VoxelNeeds};
@@ -74,30 +74,18 @@ impl Estimate {
     fn sized(scene: &Scene, plan: &FramePlan, layout: VoxelLayout, bytes: &dyn Fn(&Alloc) -> u64) -> Estimate {
         let s = &scene.settings;
         let mut e = Estimate::default();
-        let (iw, ih) = plan.internal;
-        let px = iw as u64 * ih as u64;
-        // depth 4 + albedo 4 + normal 8 + specular 4 + emission 8, radiance 16, display 4.
-        e.targets = px * (28 + 16 + 4);
-        // With moving casters the static casters' maps are cached in a second array.
-        let copies = if plan.moving_casters { 2 } else { 1 };
-        let views = plan.shadow_views as u64;
-        e.shadow_maps = if views > 0 { copies * 4 * (s.shadow_map_size as u64).pow(2) * views } else { 4 };
-        // The indirect light's targets (RGBA16F) at 1/k, and at full resolution when k > 1.
-        let (lw, lh) = plan.reduced();
-        let reduced_and_full = lw as u64 * lh as u64 + if plan.downsample > 1 { px } else { 0 };
-        if let Some(rsm) = &plan.rsm {
-            e.add_rsm(s, rsm);
-            // The mix has the gather's, the lookup's and their sum at 1/k.
-            let lows = if rsm.gather && rsm.lpv { 3 } else { 1 };
-            e.targets += 8 * (reduced_and_full + (lows - 1) * lw as u64 * lh as u64);
+        for t in plan.targets() {
+            *(if t.shadow_map { &mut e.shadow_maps } else { &mut e.targets }) += t.bytes();
+        }
+        if plan.rsm.as_ref().is_some_and(|r| r.lpv) {
+            // Ten RGBA32F volumes (light ping-pong and sum, 3 colours each, geometry) and the
+            // injection's sums (16 ints per cell).
+            let lpv = 16 * (s.gi.lpv_resolution as u64).pow(3);
+            e.volumes += 10 * lpv + 4 * lpv;
+            e.largest_volume = e.largest_volume.max(lpv);
         }
         if let Some(needs) = plan.voxels {
             let vols: Vec<u64> = voxel_allocations(scene, needs, layout, bytes).iter().map(bytes).collect();
-            if plan.cones {
-                // Diffuse, specular and shadow visibility (RGBA8) where they exist.
-                let per_px = 8 + if plan.specular { 8 } else { 0 } + if plan.cone_shadows { 4 } else { 0 };
-                e.targets += per_px * reduced_and_full;
-            }
             e.volumes = vols.iter().sum();
             e.largest_volume = vols.iter().copied().max().unwrap_or(0);
         }
@@ -110,19 +98,6 @@ impl Estimate {
         // position + normal + uv (32 B) per vertex, 4 B per index, RGBA8 textures with mips (4/3).
         e.scene = 32 * vertices + 4 * indices + texels * 16 / 3;
         e
-    }
-
-    /// The reflective shadow maps of `rsm`, and their propagation volumes where it has them.
-    fn add_rsm(&mut self, s: &crate::scene::RenderSettings, rsm: &RsmPlan) {
-        if rsm.lpv {
-            // Ten RGBA32F volumes (light ping-pong and sum, 3 colours each, geometry) and the
-            // injection's sums (16 ints per cell).
-            let lpv = 16 * (s.gi.lpv_resolution as u64).pow(3);
-            self.volumes += 10 * lpv + 4 * lpv;
-            self.largest_volume = self.largest_volume.max(lpv);
-        }
-        // Flux RGBA32F 16 + normal RGBA16F 8 + position RGBA32F 16 + depth 4 per texel.
-        self.shadow_maps += 44 * (s.gi.rsm_size as u64).pow(2) * rsm.views.len() as u64;
     }
 
     pub fn total(&self) -> u64 {

@@ -24,7 +24,7 @@ use super::passes::voxel_mips::{VoxelMipPass, VoxelMips};
 use super::passes::voxel_resolve::{Scan, VoxelResolvePass};
 use super::passes::voxel_view::{VoxelMipViewPass, VoxelViewPass};
 use super::passes::voxelize::{VoxelizePass, Voxelizer};
-use super::plan::{FramePlan, RsmPlan};
+use super::plan::{FramePlan, RsmPlan, RADIANCE_FORMAT, SHADOW_FORMAT};
 use super::rays::{missing_ray_queries, RtReflectPass, SceneRays, TopLevelBuildPass};
 use super::reuse::InputsSeen;
 use super::scene_gpu::SceneGpu;
@@ -585,9 +585,6 @@ pub struct FrameState {
     /// than this update's direct light.
     pub feed_back: bool,
 }
-
-pub const RADIANCE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
-pub const SHADOW_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
 impl FramePasses {
     /// Every pass of `plan`, the frame of `scene`.

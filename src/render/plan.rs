@@ -4,8 +4,40 @@
 //! read this one plan, so they cannot disagree on what a frame holds.
 
 use crate::render::lights;
+use crate::render::passes::gbuffer::{ALBEDO_FORMAT, DEPTH_FORMAT, EMISSION_FORMAT, NORMAL_FORMAT, SPECULAR_FORMAT};
+use crate::render::passes::gi_trace::{GI_FORMAT, SHADOW_VIS_FORMAT};
+use crate::render::passes::readback::bytes_per_texel;
+use crate::render::passes::rsm;
+use crate::render::passes::tonemap::DISPLAY_FORMAT;
 use crate::render::voxel::VoxelNeeds;
 use crate::scene::{DirectShadows, GiMode, Scene, SpecularSource, View, VoxelOcclusion};
+use ash::vk;
+
+/// The frame's shaded radiance (and its supersampling resolve): RGBA32F, linear.
+pub const RADIANCE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+/// The shadow maps' depth.
+pub const SHADOW_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
+/// One 2D image (or image array) the frame creates, for the memory estimate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Target {
+    pub name: &'static str,
+    pub format: vk::Format,
+    pub size: (u32, u32),
+    pub layers: u32,
+    /// A shadow map or reflective shadow map (the estimate counts those apart).
+    pub shadow_map: bool,
+}
+
+impl Target {
+    fn new(name: &'static str, format: vk::Format, size: (u32, u32)) -> Target {
+        Target { name, format, size, layers: 1, shadow_map: false }
+    }
+
+    pub fn bytes(&self) -> u64 {
+        u64::from(self.size.0) * u64::from(self.size.1) * u64::from(self.layers) * bytes_per_texel(self.format)
+    }
+}
 
 /// The frame of one scene with its settings (nothing here depends on the device).
 #[derive(Debug, Clone, PartialEq)]
@@ -42,6 +74,8 @@ pub struct FramePlan {
     pub rsm: Option<RsmPlan>,
     /// The indirect light's reduction (`gi.downsample`).
     pub downsample: u32,
+    /// Texels per side of each shadow-map view (`render.shadow_map_size`).
+    pub shadow_map_size: u32,
 }
 
 /// The reflective shadow maps of `gi.mode` "rsm", "lpv" or "rsm+lpv".
@@ -53,6 +87,8 @@ pub struct RsmPlan {
     pub gather: bool,
     /// A propagation volume ("lpv", "rsm+lpv").
     pub lpv: bool,
+    /// Texels per side of each map (`gi.rsm_size`).
+    pub size: u32,
 }
 
 impl FramePlan {
@@ -74,7 +110,7 @@ impl FramePlan {
         let rsm = (lit && s.gi.uses_rsm())
             .then(|| lights::rsm_views(scene))
             .filter(|views| !views.is_empty())
-            .map(|views| RsmPlan { views, gather: s.gi.gathers_rsm(), lpv: s.gi.uses_lpv() });
+            .map(|views| RsmPlan { views, gather: s.gi.gathers_rsm(), lpv: s.gi.uses_lpv(), size: s.gi.rsm_size });
         FramePlan {
             internal: s.internal_size(),
             output: (s.width, s.height),
@@ -90,6 +126,7 @@ impl FramePlan {
             moving_casters: scene.objects.iter().any(|o| !o.motion.is_static() && !o.meshes.is_empty()),
             rsm,
             downsample: s.gi.downsample,
+            shadow_map_size: s.shadow_map_size,
         }
     }
 
@@ -102,6 +139,76 @@ impl FramePlan {
     pub fn reduced(&self) -> (u32, u32) {
         let k = self.downsample;
         (self.internal.0.div_ceil(k), self.internal.1.div_ceil(k))
+    }
+
+    /// Every 2D target the frame creates, for the memory estimate (`budget`): a new target is
+    /// listed here beside the condition that makes it, and the estimate follows.
+    pub fn targets(&self) -> Vec<Target> {
+        let (internal, reduced) = (self.internal, self.reduced());
+        let mut t = vec![
+            Target::new("gbuffer depth", DEPTH_FORMAT, internal),
+            Target::new("gbuffer albedo", ALBEDO_FORMAT, internal),
+            Target::new("gbuffer normal", NORMAL_FORMAT, internal),
+            Target::new("gbuffer specular", SPECULAR_FORMAT, internal),
+            Target::new("gbuffer emission", EMISSION_FORMAT, internal),
+            Target::new("radiance", RADIANCE_FORMAT, internal),
+            Target::new("display", DISPLAY_FORMAT, self.output),
+        ];
+        if self.internal != self.output {
+            t.push(Target::new("resolved radiance", RADIANCE_FORMAT, self.output));
+        }
+        if self.rt_shadows {
+            t.push(Target::new("rt shadow visibility", SHADOW_VIS_FORMAT, internal));
+        }
+        // The indirect light at 1/k, and upsampled to full resolution when k > 1.
+        let mut gi = |name, format| {
+            t.push(Target::new(name, format, reduced));
+            if self.downsample > 1 {
+                t.push(Target::new(name, format, internal));
+            }
+        };
+        if self.cones {
+            gi("gi diffuse", GI_FORMAT);
+            if self.specular {
+                gi("gi specular", GI_FORMAT);
+            }
+            if self.cone_shadows {
+                gi("gi shadow", SHADOW_VIS_FORMAT);
+            }
+        }
+        if let Some(r) = &self.rsm {
+            // The gather's or the lookup's light; the mix has both and their sum (at 1/k).
+            gi("gi diffuse (rsm)", GI_FORMAT);
+            if r.gather && r.lpv {
+                t.extend([Target::new("gi diffuse (lpv)", GI_FORMAT, reduced); 2]);
+            }
+        }
+        t.extend(self.shadow_map_targets());
+        t
+    }
+
+    /// The shadow maps (with moving casters twice: the static casters' cache; a 1x1 placeholder
+    /// without views) and the reflective shadow maps.
+    fn shadow_map_targets(&self) -> Vec<Target> {
+        let shadow =
+            |name, format, size: u32, layers| Target { name, format, size: (size, size), layers, shadow_map: true };
+        let mut t = vec![match self.shadow_views {
+            0 => shadow("shadow map placeholder", SHADOW_FORMAT, 1, 1),
+            n => shadow("shadow maps", SHADOW_FORMAT, self.shadow_map_size, n),
+        }];
+        if self.moving_casters && self.shadow_views > 0 {
+            t.push(shadow("shadow map cache", SHADOW_FORMAT, self.shadow_map_size, self.shadow_views));
+        }
+        if let Some(r) = &self.rsm {
+            let layers = r.views.len() as u32;
+            t.extend([
+                shadow("rsm flux", rsm::FLUX_FORMAT, r.size, layers),
+                shadow("rsm normal", rsm::NORMAL_FORMAT, r.size, layers),
+                shadow("rsm position", rsm::POSITION_FORMAT, r.size, layers),
+                shadow("rsm depth", rsm::DEPTH_FORMAT, r.size, layers),
+            ]);
+        }
+        t
     }
 
     /// One line per part of the frame, for `dvsgi info`.
@@ -222,6 +329,31 @@ mod tests {
         assert!(!rsm.gather && rsm.lpv);
         scene.lights[0].cast_shadows = false;
         assert_eq!(FramePlan::of(&scene).rsm, None, "no shadowed light: no maps, no indirect light");
+    }
+
+    #[test]
+    fn the_targets_follow_the_plan_sizes_and_conditions() {
+        let mut scene = lit_scene(GiMode::Vct);
+        scene.materials[0].specular = Vec3::splat(0.5);
+        (scene.settings.width, scene.settings.height) = (40, 30);
+        scene.settings.supersample = 2;
+        scene.settings.gi.downsample = 4;
+        scene.settings.gi.shadows = DirectShadows::Cone;
+        let plan = FramePlan::of(&scene);
+        let targets = plan.targets();
+        let sizes =
+            |name: &str| -> Vec<(u32, u32)> { targets.iter().filter(|t| t.name == name).map(|t| t.size).collect() };
+        assert_eq!(sizes("gbuffer normal"), [(80, 60)], "the internal (supersampled) size");
+        assert_eq!(sizes("display"), [(40, 30)]);
+        assert_eq!(sizes("resolved radiance"), [(40, 30)]);
+        assert_eq!(sizes("gi specular"), [(20, 15), (80, 60)], "1/4 and upsampled");
+        assert_eq!(sizes("gi shadow"), [(20, 15), (80, 60)]);
+        assert!(sizes("rt shadow visibility").is_empty());
+        let maps: u64 = targets.iter().filter(|t| t.shadow_map).map(Target::bytes).sum();
+        let side = u64::from(scene.settings.shadow_map_size);
+        assert_eq!(maps, 6 * 4 * side * side, "six cube faces of 32-bit depth");
+        let gbuffer: u64 = targets.iter().filter(|t| t.name.starts_with("gbuffer")).map(Target::bytes).sum();
+        assert_eq!(gbuffer, 80 * 60 * (4 + 4 + 8 + 4 + 8));
     }
 
     #[test]
