@@ -97,7 +97,7 @@ impl Held {
 pub struct Binds<'a> {
     binds: Vec<Bind<'a>>,
     held: Vec<Held>,
-    /// Where the last binding's resources start in `held`.
+    /// Where the resources of the last call that added bindings start in `held`.
     last: usize,
 }
 
@@ -220,8 +220,8 @@ impl<'a> Binds<'a> {
         self
     }
 
-    /// The last binding's resources are overwritten whole by the pass (their previous
-    /// contents may be discarded).
+    /// The resources the last call added (a binding, or another list's bindings) are
+    /// overwritten whole by the pass: their previous contents may be discarded.
     pub fn overwritten(mut self) -> Self {
         for h in &mut self.held[self.last..] {
             h.discard = true;
@@ -240,6 +240,7 @@ impl<'a> Binds<'a> {
     /// Another list's bindings after these.
     pub fn extend(mut self, other: Binds<'a>) -> Self {
         self.binds.extend(other.binds);
+        self.last = self.held.len();
         for h in other.held {
             if !self.held.iter().any(|o| o.same(&h)) {
                 self.held.push(h);

@@ -46,8 +46,9 @@ pub struct FramePlan {
     pub internal: (u32, u32),
     /// ... and writes this one.
     pub output: (u32, u32),
-    /// The image is lit (the final, indirect or AO view): a G-buffer, lighting and indirect
-    /// light. Otherwise a voxel view shades the pixels and none of those exist.
+    /// The image is lit (the final, indirect or AO view): the G-buffer is drawn, lit, and
+    /// given indirect light. Otherwise a voxel view shades the pixels (the G-buffer's images
+    /// exist but are not drawn; no indirect light).
     pub lit: bool,
     /// What the voxel volumes hold; None without voxels (no `vct`, no voxel view).
     pub voxels: Option<VoxelNeeds>,
