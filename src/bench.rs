@@ -3,7 +3,7 @@
 
 use crate::gpu::Context;
 use crate::render::graph::QueueKind;
-use crate::render::{FrameTiming, HostWaits, Mode, PassTime, RenderOptions, Renderer};
+use crate::render::{FrameTiming, HostWaits, Mode, PassTime, RenderOptions, Renderer, SubmitRecord};
 use crate::scene::Scene;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
@@ -481,7 +481,7 @@ pub fn measure_renderer(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::
         compute_busy_ms: Stats::of(&busy(QueueKind::Compute)),
         passes,
         host_waits: waits,
-        submits_per_frame: frames.submits as f64 / m.frames as f64,
+        submits_per_frame: frames.submits.iter().map(Vec::len).sum::<usize>() as f64 / m.frames as f64,
         frame_ratio_to_sync: None,
         image_error_vs_sync: None,
         timeline: timeline_of(&timings),
@@ -493,6 +493,14 @@ pub fn measure_renderer(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::
     Ok((report, calibrated))
 }
 
+/// The submits of each timed frame of `m` on a new renderer, as the scheduler handed them to
+/// the queues: the schedule model's recording (`crate::model`).
+pub fn record_submits(ctx: &Arc<Context>, scene: &Scene, m: &Measure) -> crate::Result<Vec<Vec<SubmitRecord>>> {
+    let options = RenderOptions { mode: m.mode, frames_in_flight: m.frames_in_flight };
+    let mut r = Renderer::with_options(ctx, scene.clone(), options)?;
+    Ok(render_timed_frames(&mut r, scene, m)?.submits)
+}
+
 /// When the frames of [`render_timed_frames`] started and ended, what they submitted and the
 /// host waits before the first timed one.
 struct TimedFrames {
@@ -500,8 +508,8 @@ struct TimedFrames {
     starts: Vec<Instant>,
     /// When the GPU was idle after the last.
     end: Instant,
-    /// Submits of the timed frames.
-    submits: usize,
+    /// The submits of each timed frame.
+    submits: Vec<Vec<SubmitRecord>>,
     waits_before: HostWaits,
 }
 
@@ -526,7 +534,7 @@ impl TimedFrames {
 fn render_timed_frames(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::Result<TimedFrames> {
     let total = m.warmup + m.frames;
     let mut starts = Vec::with_capacity(total as usize);
-    let mut submits = 0usize;
+    let mut submits = Vec::new();
     let mut waits_before = r.scheduler().waits;
     for i in 0..total {
         if i == m.warmup {
@@ -539,7 +547,7 @@ fn render_timed_frames(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::R
         }
         starts.push(render_frame(r, scene, m, i)?);
         if i >= m.warmup {
-            submits += r.scheduler().submits().len();
+            submits.push(r.scheduler().submits().to_vec());
         }
     }
     r.wait_idle()?;

@@ -17,6 +17,8 @@ pub enum Error {
     Sweep(#[from] crate::sweep::SweepError),
     #[error(transparent)]
     View(#[from] crate::view::ViewError),
+    #[error(transparent)]
+    Model(#[from] crate::model::ModelError),
     /// Vulkan validation reported errors (only when validation is on).
     #[error("Vulkan validation reported {0} error(s); see the messages above")]
     Validation(u32),

@@ -9,6 +9,7 @@ pub mod cli;
 pub mod error;
 pub mod gpu;
 pub mod metrics;
+pub mod model;
 pub mod output;
 pub mod pareto;
 pub mod reference;

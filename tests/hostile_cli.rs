@@ -257,3 +257,24 @@ fn a_closed_stdout_is_the_end_of_output_not_a_crash() {
     assert!(o.status.success() && !err.contains("panicked"), "{err}");
     assert!(png.exists(), "the image is written even though nobody reads stdout");
 }
+
+#[test]
+fn a_model_of_a_missing_or_foreign_report_names_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("none.json");
+    let o = bench(&["--model", missing.to_str().unwrap()]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("none.json") && stderr(&o).contains("cannot read"),
+        "{}",
+        stderr(&o)
+    );
+    let foreign = dir.path().join("sweep.json");
+    std::fs::write(&foreign, r#"{"schema": "dvsgi-sweep/1", "rows": []}"#).unwrap();
+    let o = bench(&["--model", foreign.to_str().unwrap()]);
+    let err = stderr(&o);
+    assert!(!o.status.success() && err.contains("sweep.json") && err.contains("not a bench report"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    // A model writes no timeline.
+    let o = bench(&["--model", "docs/bench/nvidia-h200/bench-cornell-lpv.json", "--timeline", "t.svg"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}

@@ -4,8 +4,8 @@
 #
 #   tools/gpu-report.sh [--bundle DIR] [--only GROUPS] OUT_DIR
 #
-# GROUPS (comma-separated; default all): info, tests, bench, layouts, techniques, reflections,
-# serial, raster, sweep, accuracy, curves.
+# GROUPS (comma-separated; default all): info, tests, bench, model, layouts, techniques,
+# reflections, serial, raster, sweep, accuracy, curves.
 # Runs into an existing OUT_DIR add to it (steps.tsv appends), so a report can be split across
 # several shorter sessions on the GPU machine; README.md is rewritten from all of OUT_DIR.
 #
@@ -15,6 +15,9 @@
 #                          128^3 and 256^3 voxels, sync / async / async-lagged (JSON, timeline, table);
 #                          bench-{cornell,sponza}-{rsm,lpv,rsm-lpv}: the other techniques, every
 #                          frame redrawn (--scenario redraw: their maps and volume as if the light moved)
+#   model-*.json/.txt      the schedule model (issue 40, bench --model): each bench-* run of the
+#                          bench group predicted from its own pass times and the submits recorded
+#                          here, beside what it measured
 #   bench-layout-*         the voxel layouts (issue 27): Sponza at 128^3, 256^3 and 512^3, bricks
 #                          and dense, sync, 1920x1080; info-layouts.txt: their memory
 #   bench-reflect-*       the reflections (issue 28): the mirror and glossy Cornell boxes with the
@@ -61,8 +64,8 @@ if [ $# -ne 1 ]; then
 fi
 for g in ${only//,/ }; do
   case "$g" in
-    info | tests | bench | layouts | techniques | reflections | serial | raster | sweep | accuracy | curves) ;;
-    *) echo "gpu-report: unknown group '$g' (info, tests, bench, layouts, techniques, reflections, serial, raster, sweep, accuracy, curves)" >&2; exit 2 ;;
+    info | tests | bench | model | layouts | techniques | reflections | serial | raster | sweep | accuracy | curves) ;;
+    *) echo "gpu-report: unknown group '$g' (info, tests, bench, model, layouts, techniques, reflections, serial, raster, sweep, accuracy, curves)" >&2; exit 2 ;;
   esac
 done
 # want GROUP: whether this run measures GROUP.
@@ -199,6 +202,14 @@ want bench && for run in "cornell static cornell-box" "cornell dynamic dynamic-s
       --frames "$frames" --warmup "$warmup" \
       --json "$out/bench-$tag.json" --timeline "$out/bench-$tag.svg" >"$out/bench-$tag.txt" 2>&1
   done
+done
+# ----- 3-. The schedule model (issue 40): each run above predicted from its own pass times and -----
+# the submits recorded here (at a small image: they do not depend on it), beside its measurement.
+want model && for j in "$out"/bench-{cornell,sponza}-{static,dynamic}-v*.json; do
+  [ -f "$j" ] || continue
+  tag="$(basename "$j" .json)"
+  tag="${tag#bench-}"
+  step "model-$tag" 300 "$bin/bench" --model "$j" --json "$out/model-$tag.json" >"$out/model-$tag.txt" 2>&1
 done
 # ----- 3a. The voxel layouts (issue 27): bricks against dense, same resolution, same run. -----
 if [ "$quick" = 1 ]; then layout_res=(16 32); else layout_res=(128 256 512); fi

@@ -20,7 +20,7 @@ for order in compute-first graphics-first; do
     every_mode_renders_the_same_rsm_and_lpv_image the_mix_puts_the_gather_on_compute_and_the_volume_on_graphics
   tools/with-split-queues.sh cargo test --locked "$@" --test cli --test bench -- \
     every_schedule_is_clean_under_queue_submit_synchronization_validation \
-    info_reports_device_and_queue_topology bench_smoke
+    info_reports_device_and_queue_topology bench_smoke the_schedule_model_predicts
   tools/with-split-queues.sh cargo test --locked "$@" --test view -- \
     a_capture_is_what_render_makes_of_the_scene_file_it_writes
 done

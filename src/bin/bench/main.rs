@@ -3,7 +3,7 @@
 //! on both queues, the async/sync ratio, the image error each mode's schedule introduces,
 //! and a timeline picture of one frame per mode. See BENCHMARKS.md.
 
-use clap::{Parser, ValueEnum};
+use clap::{CommandFactory, FromArgMatches, Parser, ValueEnum};
 use dvsgi::bench::{self, ImageError, Measure, ModeReport, Report, Stats};
 use dvsgi::cli::{check_validation, report, CommonArgs};
 use dvsgi::gpu::{Context, QueueTopology};
@@ -13,6 +13,8 @@ use dvsgi::scene::Scene;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
+
+mod model;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum Scenario {
@@ -42,16 +44,23 @@ BENCHMARKS.md explains the schedules, the report and how to read the timeline."
 struct Args {
     #[command(flatten)]
     common: CommonArgs,
-    /// Scene file.
-    #[arg(long)]
-    scene: PathBuf,
+    /// Scene file (with --model: the report's, unless given).
+    #[arg(long, required_unless_present = "model")]
+    scene: Option<PathBuf>,
+    /// The schedule model: predict each --modes mode's frame time from this bench report's
+    /// per-pass GPU times (its device) and the submits this device's scheduler records for
+    /// the report's scene, scenario, settings, frames and frames in flight (any of which the
+    /// flags given here override; the image is --width x --height, else 96x54, as the submits
+    /// do not depend on it). Compares with what the report measured (BENCHMARKS.md).
+    #[arg(long, value_name = "REPORT.json", conflicts_with_all = ["timeline", "serial_profile", "raster_profile"])]
+    model: Option<PathBuf>,
     /// Schedule modes to compare, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "sync,async,async-lagged")]
     modes: Vec<Mode>,
-    /// Frames measured per mode (after warm-up).
+    /// Frames measured per mode (after warm-up; with --model, the report's unless given).
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     frames: u32,
-    /// Frames rendered first and not measured.
+    /// Frames rendered first and not measured (with --model, the report's unless given).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(0..=10_000))]
     warmup: u32,
     /// Image width in pixels (overrides render.width).
@@ -60,12 +69,14 @@ struct Args {
     /// Image height in pixels (overrides render.height).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     height: Option<u32>,
+    /// What changes between frames (with --model, the report's unless given).
     #[arg(long, value_enum, default_value = "static")]
     scenario: Scenario,
     /// Scene seconds per frame in the dynamic scenario.
     #[arg(long, default_value_t = 1.0 / 30.0, value_parser = dvsgi::cli::positive)]
     dt: f32,
-    /// Frames recorded ahead of the GPU (the same in every mode).
+    /// Frames recorded ahead of the GPU (the same in every mode; with --model, the report's
+    /// unless given).
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=8))]
     frames_in_flight: u32,
     /// Also host-time every pass (submitted alone and waited for), for devices whose
@@ -91,12 +102,33 @@ struct Args {
 
 fn main() -> ExitCode {
     dvsgi::cli::init_logging();
-    match run(Args::parse()) {
+    let matches = Args::command().get_matches();
+    let given = Given(matches.clone());
+    let args = match Args::from_arg_matches(&matches) {
+        Ok(a) => a,
+        Err(e) => e.exit(),
+    };
+    match run(args, &given) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             report(&e);
             ExitCode::FAILURE
         }
+    }
+}
+
+/// Which arguments the command line gave (not their defaults).
+struct Given(clap::ArgMatches);
+
+impl Given {
+    fn has(&self, id: &str) -> bool {
+        self.0.value_source(id) == Some(clap::parser::ValueSource::CommandLine)
+    }
+}
+
+impl Args {
+    fn scene_path(&self) -> &std::path::Path {
+        self.scene.as_deref().expect("--scene (clap requires it without --model)")
     }
 }
 
@@ -108,7 +140,10 @@ fn usage(msg: String) -> dvsgi::Error {
     dvsgi::Error::Usage(msg)
 }
 
-fn run(args: Args) -> dvsgi::Result<()> {
+fn run(args: Args, given: &Given) -> dvsgi::Result<()> {
+    if let Some(report) = args.model.clone() {
+        return model::run(args, given, &report);
+    }
     check_outputs(&args)?;
     let scene = load_bench_scene(&args)?;
     let ctx = args.common.context()?;
@@ -150,14 +185,14 @@ fn load_bench_scene(args: &Args) -> dvsgi::Result<Scene> {
     if args.scenario != Scenario::Static {
         extra.push(("gi.update_interval".to_string(), "1".to_string()));
     }
-    let scene = args.common.load_scene(&args.scene, &extra)?;
+    let scene = args.common.load_scene(args.scene_path(), &extra)?;
     let moves =
         scene.objects.iter().any(|o| !o.motion.is_static()) || scene.lights.iter().any(|l| !l.motion.is_static());
     if args.scenario == Scenario::Dynamic && !moves {
         return Err(usage(format!(
             "{}: the dynamic scenario needs moving objects or lights, and nothing in this scene moves \
              (try scenes/dynamic-stress.toml)",
-            args.scene.display()
+            args.scene_path().display()
         )));
     }
     if args.scenario == Scenario::Dynamic && !(args.dt.is_finite() && args.dt > 0.0) {
@@ -214,7 +249,7 @@ fn build_report(ctx: &Context, args: &Args, scene: &Scene, modes: Vec<ModeReport
             timestamps_calibrated: calibrated,
             timestamps_trusted: !ctx.info.is_cpu(),
         },
-        scene: args.scene.display().to_string(),
+        scene: args.scene_path().display().to_string(),
         scenario: format!("{:?}", args.scenario).to_lowercase(),
         width: scene.settings.width,
         height: scene.settings.height,
