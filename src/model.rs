@@ -67,8 +67,9 @@ pub struct ModeModel {
     pub error: Option<f64>,
     /// Predicted host median over the predicted sync one.
     pub predicted_ratio_to_sync: Option<f64>,
-    /// Passes whose count per frame differs between the recorded frames and the report's
-    /// timeline: the recording is then not the schedule the report measured.
+    /// Passes whose count differs between the report's timeline (one measured frame) and the
+    /// recorded frame closest to it; empty when some recorded frame has exactly its passes.
+    /// Not empty: the recording is not the schedule the report measured.
     pub structure_differences: Vec<String>,
     /// Recorded passes the report has no time for (a version that did not run them): they
     /// count 0 ms.
@@ -118,7 +119,7 @@ pub fn model_mode(report: &Report, path: &Path, mode: Mode, rec: &Recording) -> 
     }
     let predicted = simulate(rec, &|name, q| times.get(name, q).unwrap_or(0.0));
     let timeline: Vec<String> = source.timeline.iter().map(|p| p.name.clone()).collect();
-    let structure_differences = rec.frames.last().map(|f| structure_differences(&timeline, f)).unwrap_or_default();
+    let structure_differences = closest_structure(&timeline, rec);
     let median = |s: Option<Stats>| s.map(|s| s.median);
     let measured_frame = measured.map(|m| m.frame_host_ms.median);
     let last = rec.frames.len().saturating_sub(1);
@@ -314,6 +315,12 @@ pub fn waits_across_frames(rec: &Recording) -> Vec<CrossFrameWait> {
     out
 }
 
+/// The differences between `report_frame` and the recorded frame with the fewest (frames of
+/// a run can differ: a map drawn in one frame and reused in the next).
+pub fn closest_structure(report_frame: &[String], rec: &Recording) -> Vec<String> {
+    rec.frames.iter().map(|f| structure_differences(report_frame, f)).min_by_key(Vec::len).unwrap_or_default()
+}
+
 /// How a recorded frame's passes differ from the frame a report shows (its timeline): each
 /// pass whose count differs, as "NAME: report N, recorded M". Empty when they agree.
 pub fn structure_differences(report_frame: &[String], recorded: &[SubmitRecord]) -> Vec<String> {
@@ -457,6 +464,13 @@ mod tests {
             ["shadow", "gbuffer", "cone trace", "lighting"].iter().map(|s| s.to_string()).collect();
         assert_eq!(structure_differences(&report, &recorded), vec!["shadow: report 1, recorded 0".to_string()]);
         assert!(structure_differences(&report[1..], &recorded).is_empty());
+        // The report's frame may be any of the run's: the closest recorded one is compared.
+        let first = vec![submit(G, 1, None, &["shadow", "gbuffer", "lighting"]), submit(C, 1, None, &["cone trace"])];
+        let rec = Recording { frames_in_flight: 2, frames: vec![first, recorded.clone()] };
+        assert!(closest_structure(&report, &rec).is_empty());
+        assert_eq!(closest_structure(&report[1..], &rec), Vec::<String>::new());
+        let other = Recording { frames_in_flight: 2, frames: vec![recorded] };
+        assert_eq!(closest_structure(&report, &other).len(), 1);
     }
 
     #[test]
