@@ -460,7 +460,7 @@ pub fn measure(ctx: &Arc<Context>, scene: &Scene, m: &Measure) -> crate::Result<
 
 /// [`measure`] with a renderer already made (its later frames continue from its state).
 pub fn measure_renderer(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::Result<(ModeReport, bool)> {
-    let frames = render_timed_frames(r, scene, m)?;
+    let frames = render_timed_frames(r, scene, m, false)?;
     let host = frames.host_ms(m);
     let waits = waits_since(r.scheduler().waits, frames.waits_before);
     let timings: Vec<_> = r.take_timings().into_iter().filter(|f| f.frame >= m.warmup as u64).collect();
@@ -481,7 +481,7 @@ pub fn measure_renderer(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::
         compute_busy_ms: Stats::of(&busy(QueueKind::Compute)),
         passes,
         host_waits: waits,
-        submits_per_frame: frames.submits.iter().map(Vec::len).sum::<usize>() as f64 / m.frames as f64,
+        submits_per_frame: frames.submits as f64 / m.frames as f64,
         frame_ratio_to_sync: None,
         image_error_vs_sync: None,
         timeline: timeline_of(&timings),
@@ -498,7 +498,7 @@ pub fn measure_renderer(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::
 pub fn record_submits(ctx: &Arc<Context>, scene: &Scene, m: &Measure) -> crate::Result<Vec<Vec<SubmitRecord>>> {
     let options = RenderOptions { mode: m.mode, frames_in_flight: m.frames_in_flight };
     let mut r = Renderer::with_options(ctx, scene.clone(), options)?;
-    Ok(render_timed_frames(&mut r, scene, m)?.submits)
+    Ok(render_timed_frames(&mut r, scene, m, true)?.recorded)
 }
 
 /// When the frames of [`render_timed_frames`] started and ended, what they submitted and the
@@ -508,8 +508,11 @@ struct TimedFrames {
     starts: Vec<Instant>,
     /// When the GPU was idle after the last.
     end: Instant,
-    /// The submits of each timed frame.
-    submits: Vec<Vec<SubmitRecord>>,
+    /// Submits of the timed frames.
+    submits: usize,
+    /// With `record`: the submits of each timed frame (copied only when asked, as the copy
+    /// falls inside the timed host interval).
+    recorded: Vec<Vec<SubmitRecord>>,
     waits_before: HostWaits,
 }
 
@@ -531,10 +534,10 @@ impl TimedFrames {
 }
 
 /// Render the `warmup + frames` frames of `m`, then wait until the GPU is idle.
-fn render_timed_frames(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::Result<TimedFrames> {
+fn render_timed_frames(r: &mut Renderer, scene: &Scene, m: &Measure, record: bool) -> crate::Result<TimedFrames> {
     let total = m.warmup + m.frames;
     let mut starts = Vec::with_capacity(total as usize);
-    let mut submits = Vec::new();
+    let (mut submits, mut recorded) = (0usize, Vec::new());
     let mut waits_before = r.scheduler().waits;
     for i in 0..total {
         if i == m.warmup {
@@ -547,11 +550,14 @@ fn render_timed_frames(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::R
         }
         starts.push(render_frame(r, scene, m, i)?);
         if i >= m.warmup {
-            submits.push(r.scheduler().submits().to_vec());
+            submits += r.scheduler().submits().len();
+            if record {
+                recorded.push(r.scheduler().submits().to_vec());
+            }
         }
     }
     r.wait_idle()?;
-    Ok(TimedFrames { starts, end: Instant::now(), submits, waits_before })
+    Ok(TimedFrames { starts, end: Instant::now(), submits, recorded, waits_before })
 }
 
 /// Render frame `i` of `m` (asking for a voxel update in the dynamic scenario); returns when
