@@ -79,8 +79,18 @@ pub struct DeviceReport {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModeReport {
-    /// "sync", "async" or "async-lagged".
+    /// "sync", "async", "async-lagged" or "async-pipelined".
     pub mode: String,
+    /// Frames between a frame's submission and the frame whose display a viewer presents
+    /// with it (`Mode::latency_frames`: 1 for async-pipelined).
+    #[serde(default)]
+    pub latency_frames: u32,
+    /// Copies of the frame's own targets and maps (async-pipelined: one per frame in flight).
+    #[serde(default = "one")]
+    pub frame_copies: u32,
+    /// GPU memory of the copies after the first, bytes.
+    #[serde(default)]
+    pub frame_copies_bytes: u64,
     /// Host wall clock per frame in steady state: the interval between the starts of
     /// consecutive frames (the last one ends when the GPU is idle).
     pub frame_host_ms: Stats,
@@ -112,6 +122,11 @@ pub struct ModeReport {
     /// `--raster-profile`: what the G-buffer's time is made of (absent without it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub raster: Option<RasterReport>,
+}
+
+/// One copy of the frame (reports written before `frame_copies` existed).
+fn one() -> u32 {
+    1
 }
 
 /// `--raster-profile` (`render::raster_profile`): the G-buffer, a depth prepass of its opaque
@@ -473,6 +488,9 @@ pub fn measure_renderer(r: &mut Renderer, scene: &Scene, m: &Measure) -> crate::
     let busy = |q| with_stamps.iter().map(|f| busy_ms(f, q)).collect::<Vec<_>>();
     let report = ModeReport {
         mode: m.mode.name().to_string(),
+        latency_frames: m.mode.latency_frames(),
+        frame_copies: r.copy_count() as u32,
+        frame_copies_bytes: r.copies_bytes(),
         frame_host_ms: Stats::of(&host).expect("at least one frame"),
         frame_host_mean_ms: frames.mean_ms(m),
         frame_host_samples: host,

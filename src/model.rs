@@ -56,7 +56,7 @@ pub fn report_layout(report: &Report) -> Option<String> {
 pub struct ModeModel {
     pub mode: String,
     /// The report's mode whose pass times were used (the same mode where it was measured,
-    /// else sync, else the first).
+    /// else async, else sync, else the first).
     pub times_from: String,
     pub predicted: Prediction,
     /// The report's host median frame time, where it measured this mode.
@@ -111,8 +111,10 @@ pub struct ModelReport {
 /// Model `mode` from `report`'s pass times and the recorded frames.
 pub fn model_mode(report: &Report, path: &Path, mode: Mode, rec: &Recording) -> Result<ModeModel, ModelError> {
     let measured = report.modes.iter().find(|m| m.mode == mode.name());
-    let source =
-        measured.or_else(|| report.modes.iter().find(|m| m.mode == Mode::Sync.name())).unwrap_or(&report.modes[0]);
+    // A mode the report did not measure (async-pipelined in reports before it) takes the
+    // times of async, whose GI already ran on the compute queue, else of sync.
+    let named = |m: Mode| report.modes.iter().find(|r| r.mode == m.name());
+    let source = measured.or_else(|| named(Mode::Async)).or_else(|| named(Mode::Sync)).unwrap_or(&report.modes[0]);
     let times = PassTimes::of(source);
     if times.by_name.is_empty() {
         return Err(ModelError::NoTimes { path: path.into() });
@@ -219,11 +221,12 @@ pub fn simulate(rec: &Recording, time: &dyn Fn(&str, QueueKind) -> f64) -> Predi
 }
 
 /// When a queue reached timeline value `v`: the end of the first batch that signals `v` or
-/// more (values signalled before the recording began were reached at time 0).
+/// more; values below the first one recorded were signalled before the recording began (by
+/// the warm-up frames) and were reached at time 0.
 fn end_of(reached: &BTreeMap<u64, f64>, v: u64) -> f64 {
-    match reached.range(v..).next() {
-        Some((_, &t)) => t,
-        None => 0.0,
+    match reached.first_key_value() {
+        Some((&first, _)) if v >= first => reached.range(v..).next().map_or(0.0, |(_, &t)| t),
+        _ => 0.0,
     }
 }
 
@@ -418,6 +421,27 @@ mod tests {
         // A frame starts when the frame two before it has finished its trace, and its own
         // trace follows the one of the frame before: two frames' traces.
         assert!((p.gpu_span_ms.median - 10.0).abs() < 1e-9);
+    }
+
+    /// A recording that begins after warm-up frames: a wait for a value they signalled is
+    /// met at once, not by the first recorded batch that signals more.
+    #[test]
+    fn values_from_before_the_recording_are_reached_at_once() {
+        let frames = (0..4u64)
+            .map(|i| {
+                // Compute values 1..=3 belong to warm-up frames; graphics of frame i waits for
+                // compute's value i + 2 (two frames before), the first recorded one is 4.
+                vec![
+                    submit(G, i + 4, Some(i + 2), &["shadow", "gbuffer"]),
+                    submit(C, i + 4, Some(i + 4), &["cone trace"]),
+                ]
+            })
+            .collect();
+        let p = simulate(&Recording { frames_in_flight: 2, frames }, &times);
+        // Frame 1's graphics work follows frame 0's at once (4..8), its trace frame 0's
+        // (9..14); frames 2 and 3 start when frames 0 and 1 are done (9, 14) and end at 19, 24.
+        // Were value 3 reached only with the first recorded one (4, at 9), frame 1 would end at 18.
+        assert_eq!(p.frame_host_samples, [0.0, 9.0, 5.0, 10.0], "{p:?}");
     }
 
     /// One frame in flight: the host waits for each frame, so nothing overlaps.

@@ -8,7 +8,7 @@ mod common;
 use common::*;
 use dvsgi::gpu::{Buffer, GpuError};
 use dvsgi::render::budget::{Estimate, Limits};
-use dvsgi::render::Renderer;
+use dvsgi::render::{Mode, RenderOptions, Renderer};
 use gpu_allocator::MemoryLocation;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -52,13 +52,27 @@ fn memory_estimate_matches_what_is_allocated() {
         }
         // "auto" as the renderer resolves it on this device.
         scene.settings.gi.voxel_layout = dvsgi::render::budget::resolve_layout(&scene, &Limits::of(&ctx));
-        let est = Estimate::on(&ctx, &scene).total() as f64;
+        let estimate = Estimate::on(&ctx, &scene);
+        let est = estimate.total() as f64;
         let before = ctx.allocated_bytes();
-        let r = Renderer::new(&ctx, scene).unwrap();
+        let r = Renderer::new(&ctx, scene.clone()).unwrap();
         let got = (ctx.allocated_bytes() - before) as f64;
         drop(r);
         eprintln!("{label}: estimated {:.2} MiB, allocated {:.2} MiB", est / 1048576.0, got / 1048576.0);
         assert!((est / got - 1.0).abs() < 0.10, "{label}: estimate {est} vs allocated {got}");
+        // async-pipelined, three frames in flight: two more copies of the frame's own images.
+        if !label.contains("256") {
+            let options = RenderOptions { mode: Mode::AsyncPipelined, frames_in_flight: 3 };
+            let r = Renderer::with_options(&ctx, scene, options).unwrap();
+            let (copies, est) = (r.copies_bytes() as f64, estimate.with_copies(3).copies as f64);
+            eprintln!(
+                "{label}: two more copies estimated {:.2} MiB, made {:.2} MiB",
+                est / 1048576.0,
+                copies / 1048576.0
+            );
+            assert_eq!(r.copy_count(), 3);
+            assert!((est / copies - 1.0).abs() < 0.10, "{label}: copies estimated {est} vs made {copies}");
+        }
     }
     assert_no_validation_messages(&ctx);
 }

@@ -297,7 +297,7 @@ fn same_image_in_every_schedule(ctx: &std::sync::Arc<dvsgi::gpu::Context>, s: Sc
     let sync = r.output().radiance;
     assert!(sync.iter().any(|v| *v > 0.0));
     for mode in [Mode::Async, Mode::AsyncLagged, Mode::Sync, Mode::Async] {
-        r.set_mode(mode);
+        r.set_mode(mode).unwrap();
         r.render(0.0, true).unwrap();
         let out = r.output().radiance;
         let differing = sync.iter().zip(&out).filter(|(a, b)| a != b).count();

@@ -242,7 +242,7 @@ fn every_schedule_mode_renders_the_same_reflections() {
     r.render(t, true).unwrap();
     let sync = r.output().radiance;
     for mode in [Mode::Async, Mode::AsyncLagged] {
-        r.set_mode(mode);
+        r.set_mode(mode).unwrap();
         r.render(t, true).unwrap();
         assert!(r.output().radiance == sync, "{mode} differs from sync");
         assert!(r.last_pass_names().iter().any(|n| n == "rt reflections"), "{mode}: {:?}", r.last_pass_names());
@@ -358,7 +358,7 @@ fn shadow_rays_give_the_path_tracers_direct_light_in_every_schedule_mode() {
     );
     assert!(off(&sync) <= 0.001, "{:.2}% of the pixels are off", 100.0 * off(&sync));
     for mode in [Mode::Async, Mode::AsyncLagged] {
-        r.set_mode(mode);
+        r.set_mode(mode).unwrap();
         r.render(t, true).unwrap();
         assert!(r.output().radiance == sync, "{mode} differs from sync");
         let names = r.last_pass_names();

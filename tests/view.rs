@@ -62,7 +62,8 @@ fn a_capture_is_what_render_makes_of_the_scene_file_it_writes() {
     let stem = dir.path().join("shot");
     let text = format!(
         "pause\nframes 2\ncamera 0.35 0.3 -0.6 0.25 0.25 0.2\nturn 4 -2\nfly 0.2 0.1 0 1\ngi rsm\nframes 2\n\
-         schedule sync\ngi vct\nset gi.diffuse_cones=4\nschedule async-lagged\nframes 3\ncapture {}\nquit\n",
+         schedule sync\ngi vct\nset gi.diffuse_cones=4\nschedule async-pipelined\nframes 3\nschedule async-lagged\nframes 3\n\
+         capture {}\nquit\n",
         stem.display()
     );
     let Some(out) = run_script(dir.path(), (96, 64), &text) else { return };
@@ -94,7 +95,9 @@ fn switching_every_technique_and_schedule_keeps_validation_clean_and_memory_flat
     let round: String = ["none", "vct", "rsm", "lpv", "rsm+lpv"]
         .iter()
         .flat_map(|gi| {
-            ["sync", "async", "async-lagged"].iter().map(move |s| format!("gi {gi}\nschedule {s}\nframes 5\n"))
+            ["sync", "async", "async-lagged", "async-pipelined"]
+                .iter()
+                .map(move |s| format!("gi {gi}\nschedule {s}\nframes 5\n"))
         })
         .collect();
     // A first round brings every pipeline and allocation pool into being; three more must

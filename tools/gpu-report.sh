@@ -12,7 +12,8 @@
 #   info.txt               dvsgi info (devices, queue families, topology, limits) + per-scene costs
 #   tests.log              the test suite, validation on (any validation message fails a test)
 #   bench-*.json/.svg/.txt bench, static and dynamic, Cornell box and Sponza, 1920x1080,
-#                          128^3 and 256^3 voxels, sync / async / async-lagged (JSON, timeline, table);
+#                          128^3 and 256^3 voxels, sync / async / async-lagged / async-pipelined
+#                          (JSON, timeline, table);
 #                          bench-{cornell,sponza}-{rsm,lpv,rsm-lpv}: the other techniques, every
 #                          frame redrawn (--scenario redraw: their maps and volume as if the light moved)
 #   model-*.json/.txt      the schedule model (issue 40, bench --model): each bench-* run of the
@@ -198,7 +199,7 @@ want bench && for run in "cornell static cornell-box" "cornell dynamic dynamic-s
   for v in "${res[@]}"; do
     tag="$name-$scenario-v$v"
     step "bench-$tag" 300 "$bin/bench" --scene "scenes/$scene.toml" --scenario "$scenario" \
-      --modes sync,async,async-lagged --width "$w" --height "$h" --set "gi.voxel_resolution=$v" \
+      --modes sync,async,async-lagged,async-pipelined --width "$w" --height "$h" --set "gi.voxel_resolution=$v" \
       --frames "$frames" --warmup "$warmup" \
       --json "$out/bench-$tag.json" --timeline "$out/bench-$tag.svg" >"$out/bench-$tag.txt" 2>&1
   done
@@ -230,7 +231,7 @@ want techniques && for run in "cornell cornell-box" "sponza sponza"; do
   read -r name scene <<<"$run"
   for mode in rsm lpv rsm+lpv; do
     tag="$name-${mode/+/-}"
-    step "bench-$tag" 300 "$bin/bench" --scene "scenes/$scene.toml" --scenario redraw --modes sync,async,async-lagged \
+    step "bench-$tag" 300 "$bin/bench" --scene "scenes/$scene.toml" --scenario redraw --modes sync,async,async-lagged,async-pipelined \
       --width "$w" --height "$h" --set "gi.mode=\"$mode\"" --frames "$frames" --warmup "$warmup" \
       --json "$out/bench-$tag.json" --timeline "$out/bench-$tag.svg" >"$out/bench-$tag.txt" 2>&1
   done
@@ -333,15 +334,15 @@ fi
     python3 - "$out" <<'PY'
 import json, pathlib, sys
 out = pathlib.Path(sys.argv[1])
-print("| run | sync | async | async-lagged | async/sync | lagged/sync | GPU span sync / async (ms) |")
-print("|---|---|---|---|---|---|---|")
+print("| run | sync | async | async-lagged | async-pipelined | async/sync | lagged/sync | pipelined/sync | GPU span sync / async (ms) |")
+print("|---|---|---|---|---|---|---|---|---|")
 for f in sorted(out.glob("bench-*.json")):
     r = json.loads(f.read_text())
     m = {x["mode"]: x for x in r["modes"]}
     med = lambda k: "%.2f" % m[k]["frame_host_ms"]["median"] if k in m else "-"
     rat = lambda k: "%.3f" % m[k]["frame_ratio_to_sync"] if k in m and m[k].get("frame_ratio_to_sync") else "-"
     span = lambda k: "%.2f" % m[k]["gpu_span_ms"]["median"] if k in m and m[k].get("gpu_span_ms") else "-"
-    print(f"| {f.stem[6:]} | {med('sync')} | {med('async')} | {med('async-lagged')} | {rat('async')} | {rat('async-lagged')} | {span('sync')} / {span('async')} |")
+    print(f"| {f.stem[6:]} | {med('sync')} | {med('async')} | {med('async-lagged')} | {med('async-pipelined')} | {rat('async')} | {rat('async-lagged')} | {rat('async-pipelined')} | {span('sync')} / {span('async')} |")
 PY
   fi
 } >"$out/README.md" 2>>"$out/report.log"

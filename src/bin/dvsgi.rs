@@ -91,8 +91,8 @@ enum Command {
         /// Global illumination: none | vct | rsm | lpv | rsm+lpv (overrides gi.mode).
         #[arg(long)]
         gi: Option<String>,
-        /// Queue schedule: sync | async | async-lagged (async-lagged needs earlier frames:
-        /// see --frames).
+        /// Queue schedule: sync | async | async-lagged | async-pipelined (async-lagged needs
+        /// earlier frames: see --frames).
         #[arg(long, default_value = "async")]
         schedule: Mode,
         /// Frames to render at the same scene time before writing the last one.
@@ -119,7 +119,8 @@ The viewer exits at the end of the script; each script frame advances scene time
         scene: PathBuf,
         #[command(flatten)]
         size: SizeArgs,
-        /// Queue schedule to start with: sync | async | async-lagged.
+        /// Queue schedule to start with: sync | async | async-lagged | async-pipelined (the
+        /// window then shows each frame one frame later).
         #[arg(long, default_value = "async")]
         schedule: Mode,
         /// Drive the viewer from a file of commands instead of input (tests, figures).
@@ -783,6 +784,11 @@ fn print_scene(common: &CommonArgs, ctx: &std::sync::Arc<Context>, scene: dvsgi:
         estimate.total() as f64 / (1024.0 * 1024.0),
         ctx.info.device_local_heap as f64 / (1024.0 * 1024.0)
     );
+    outln!(
+        "  async-pipelined adds a copy of the frame's targets and maps per frame in flight beyond the first: \
+         {:.2} MiB each",
+        estimate.frame_copy as f64 / (1024.0 * 1024.0)
+    );
     let before = ctx.allocated_bytes();
     let time = scene.settings.time;
     let textures = scene.textures.len();
@@ -833,6 +839,10 @@ fn occupancy(renderer: &mut Renderer, time: f32) -> dvsgi::Result<()> {
 fn schedule_line(ctx: &Context, mode: Mode) -> String {
     match mode {
         Mode::Sync => "sync (everything on the graphics queue)".to_string(),
+        Mode::AsyncPipelined => format!(
+            "{mode}, {}; one copy of the frame's targets per frame in flight, shown one frame later",
+            ctx.topology.describe()
+        ),
         _ => format!("{mode}, {}", ctx.topology.describe()),
     }
 }

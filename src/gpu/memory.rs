@@ -130,6 +130,12 @@ pub struct ImageDesc {
     /// Array layers (D2Array).
     pub layers: u32,
     pub usage: vk::ImageUsageFlags,
+    /// Shared by the graphics and compute families at once (CONCURRENT) where they differ,
+    /// instead of moving between them by ownership transfers: for images both queues use in
+    /// every frame whose contents carry from frame to frame (the voxel volumes), so that a
+    /// queue's next use waits only for the other queue's last use, not for a release recorded
+    /// after all of its later work (`render::graph`).
+    pub concurrent: bool,
 }
 
 impl ImageDesc {
@@ -141,6 +147,7 @@ impl ImageDesc {
             mip_levels: 1,
             layers: 1,
             usage,
+            concurrent: false,
         }
     }
     pub fn d2_array(format: vk::Format, width: u32, height: u32, layers: u32, usage: vk::ImageUsageFlags) -> Self {
@@ -154,6 +161,7 @@ impl ImageDesc {
             mip_levels,
             layers: 1,
             usage,
+            concurrent: false,
         }
     }
     /// Texels of level 0.
@@ -204,6 +212,9 @@ pub struct Image {
     pub desc: ImageDesc,
     pub name: String,
     pub bytes: u64,
+    /// Created CONCURRENT by both families (`ImageDesc::concurrent` on a device whose families
+    /// differ): the tracker plans no ownership transfers for it.
+    pub concurrent: bool,
     /// Whether dropping it destroys the `VkImage` (not a swapchain's image, see [`Image::external`]).
     owned: bool,
 }
@@ -233,13 +244,30 @@ fn check_image_limits(ctx: &Context, name: &str, desc: &ImageDesc) -> GpuResult<
 
 /// The image object of `desc` (optimal tiling, one sample, exclusive, UNDEFINED), no memory yet.
 fn create_image(ctx: &Context, desc: &ImageDesc) -> GpuResult<vk::Image> {
-    unsafe { ctx.device.create_image(&image_info(desc), None) }.vk("vkCreateImage")
+    let families = concurrent_families(ctx, desc);
+    let info = shared_by(image_info(desc), &families);
+    unsafe { ctx.device.create_image(&info, None) }.vk("vkCreateImage")
+}
+
+/// The families that share an image of `desc` at once: both, where it asks for CONCURRENT
+/// sharing and the device's graphics and compute families differ; else none (EXCLUSIVE).
+fn concurrent_families(ctx: &Context, desc: &ImageDesc) -> Vec<u32> {
+    ctx.distinct_families().filter(|_| desc.concurrent).map(Vec::from).unwrap_or_default()
+}
+
+/// `info` shared CONCURRENT by `families` (when there are any).
+fn shared_by<'a>(info: vk::ImageCreateInfo<'a>, families: &'a [u32]) -> vk::ImageCreateInfo<'a> {
+    match families {
+        [] => info,
+        f => info.sharing_mode(vk::SharingMode::CONCURRENT).queue_family_indices(f),
+    }
 }
 
 /// The bytes `ctx`'s device asks for an image of `desc`, its padding and alignment included
 /// (vkGetDeviceImageMemoryRequirements, maintenance4: no image is created).
 pub fn device_image_bytes(ctx: &Context, desc: &ImageDesc) -> u64 {
-    let info = image_info(desc);
+    let families = concurrent_families(ctx, desc);
+    let info = shared_by(image_info(desc), &families);
     let query = vk::DeviceImageMemoryRequirements::default().create_info(&info);
     let mut req = vk::MemoryRequirements2::default();
     unsafe { ctx.device.get_device_image_memory_requirements(&query, &mut req) };
@@ -334,6 +362,7 @@ impl Image {
             name: name.to_string(),
             bytes,
             owned,
+            concurrent: desc.concurrent && ctx.distinct_families().is_some(),
         }
     }
 

@@ -459,7 +459,7 @@ impl PathTracer {
     pub fn image(&mut self) -> GpuResult<ReferenceImage> {
         let sum = ImageDownload::new(&self.ctx, &self.pass.accum)?;
         let sum_sq = ImageDownload::new(&self.ctx, &self.pass.accum_sq)?;
-        let host = HostReadPass { buffers: vec![sum.buffer.clone(), sum_sq.buffer.clone()] };
+        let host = HostReadPass { buffers: vec![sum.buffer.clone(), sum_sq.buffer.clone()], tail: false };
         self.scheduler.begin(None)?;
         self.scheduler.record(&[&sum, &sum_sq, &host])?;
         self.scheduler.end(true)?;

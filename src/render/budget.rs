@@ -41,6 +41,12 @@ pub struct Estimate {
     pub shadow_maps: u64,
     /// Vertex and index buffers and textures.
     pub scene: u64,
+    /// One copy of what a frame has for itself: the targets, the shadow maps and the
+    /// propagation volumes (not in the total: see `copies`).
+    pub frame_copy: u64,
+    /// The copies beyond the first that `async-pipelined` keeps, one per frame in flight
+    /// ([`Estimate::with_copies`]; 0 otherwise).
+    pub copies: u64,
 }
 
 impl Estimate {
@@ -77,13 +83,16 @@ impl Estimate {
         for t in plan.targets() {
             *(if t.shadow_map { &mut e.shadow_maps } else { &mut e.targets }) += t.bytes();
         }
+        let mut lpv_bytes = 0;
         if plan.rsm.as_ref().is_some_and(|r| r.lpv) {
             // Ten RGBA32F volumes (light ping-pong and sum, 3 colours each, geometry) and the
             // injection's sums (16 ints per cell).
             let lpv = 16 * (s.gi.lpv_resolution as u64).pow(3);
-            e.volumes += 10 * lpv + 4 * lpv;
+            lpv_bytes = 10 * lpv + 4 * lpv;
+            e.volumes += lpv_bytes;
             e.largest_volume = e.largest_volume.max(lpv);
         }
+        e.frame_copy = e.targets + e.shadow_maps + lpv_bytes;
         if let Some(needs) = plan.voxels {
             let vols: Vec<u64> = voxel_allocations(scene, needs, layout, bytes).iter().map(bytes).collect();
             e.volumes = vols.iter().sum();
@@ -101,7 +110,12 @@ impl Estimate {
     }
 
     pub fn total(&self) -> u64 {
-        self.volumes + self.targets + self.shadow_maps + self.scene
+        self.volumes + self.targets + self.shadow_maps + self.scene + self.copies
+    }
+
+    /// With `n` copies of the frame's own resources (`Renderer::copy_count`): n - 1 more.
+    pub fn with_copies(self, n: u32) -> Estimate {
+        Estimate { copies: u64::from(n.saturating_sub(1)) * self.frame_copy, ..self }
     }
 
     /// Refuse what cannot fit this device: more than its largest device-local heap in all, or a

@@ -57,60 +57,115 @@ pub struct VoxelPasses {
 }
 
 impl VoxelPasses {
-    /// Voxelization (static, dynamic, bricks), the voxels' light, their mips and bounces.
+    /// Voxelization (static, dynamic, bricks), the voxels' light, their mips and bounces, over
+    /// the `shared` volumes and reading this copy's `frame` data and shadow `atlas`.
     fn new(
         ctx: &Arc<Context>,
         scene: &Scene,
         scene_gpu: &Arc<SceneGpu>,
         frame: &FrameBuffers,
-        (atlas, needs): (&Arc<Image>, VoxelNeeds),
+        (atlas, shared): (&Arc<Image>, &VoxelShared),
     ) -> GpuResult<VoxelPasses> {
         let s = &scene.settings;
-        let volumes = Arc::new(VoxelVolumes::new(ctx, scene, needs)?);
+        let VoxelShared { volumes, keeper, scan, mips: shared_mips } = shared;
+        let volumes = volumes.clone();
         let voxelizer = Voxelizer::new(ctx, scene_gpu, frame, &volumes)?;
-        let keeper = ListKeeper::new(ctx, &volumes)?;
-        // One scan (glsl/scan.comp) for the static work list and every brick allocation.
-        let scan = Arc::new(Scan::new(ctx, &volumes)?);
         let dynamic = if volumes.needs.dynamic {
             Some(DynamicPasses {
-                clear: DynamicClearPass::new(ctx, &volumes, &keeper)?,
-                bricks: BrickPasses::new(ctx, &voxelizer, &volumes, true, &scan)?,
+                clear: DynamicClearPass::new(ctx, &volumes, keeper)?,
+                bricks: BrickPasses::new(ctx, &voxelizer, &volumes, true, scan)?,
                 voxelize: VoxelizePass::new(&voxelizer, true),
-                list: VoxelListPass::new(&keeper, ListStep::Dynamic),
+                list: VoxelListPass::new(keeper, ListStep::Dynamic),
                 resolve: VoxelResolvePass::after_dynamic(ctx, &volumes)?,
             })
         } else {
             None
         };
-        let (mips, bounces) = if volumes.needs.cones {
-            let shared = VoxelMips::new(ctx, &volumes)?;
+        let (mips, bounces) = if let Some(shared) = shared_mips {
             let bounces = if volumes.needs.bounces > 0 {
                 let bounced = &volumes.bounced[0];
                 Some(BouncePasses {
                     from_direct: VoxelBouncePass::new(ctx, frame, &volumes, &volumes.radiance)?,
                     from_bounced: VoxelBouncePass::new(ctx, frame, &volumes, bounced)?,
                     compose: BounceComposePass::new(ctx, &volumes)?,
-                    mips: VoxelMipPass::new(ctx, &shared, &volumes, bounced)?,
+                    mips: VoxelMipPass::new(ctx, shared, &volumes, bounced)?,
                 })
             } else {
                 None
             };
-            (Some(VoxelMipPass::new(ctx, &shared, &volumes, &volumes.radiance)?), bounces)
+            (Some(VoxelMipPass::new(ctx, shared, &volumes, &volumes.radiance)?), bounces)
         } else {
             (None, None)
         };
         Ok(VoxelPasses {
             light: VoxelLightPass::new(ctx, frame, &volumes, atlas, &s.gi)?,
             clear: VoxelClearPass::new(&volumes),
-            bricks_static: BrickPasses::new(ctx, &voxelizer, &volumes, false, &scan)?,
+            bricks_static: BrickPasses::new(ctx, &voxelizer, &volumes, false, scan)?,
             voxelize_static: VoxelizePass::new(&voxelizer, false),
-            resolve_static: VoxelResolvePass::after_static(ctx, &volumes, &scan)?,
-            list_static: VoxelListPass::new(&keeper, ListStep::Static),
+            resolve_static: VoxelResolvePass::after_static(ctx, &volumes, scan)?,
+            list_static: VoxelListPass::new(keeper, ListStep::Static),
             dynamic,
             mips,
             bounces,
             volumes,
         })
+    }
+}
+
+/// What every copy of the voxel passes shares: the volumes and work lists (what a frame leaves
+/// for the next), and the pipelines of the list steps, the scan and the mips.
+pub struct VoxelShared {
+    pub volumes: Arc<VoxelVolumes>,
+    keeper: Arc<ListKeeper>,
+    /// One scan (glsl/scan.comp) for the static work list and every brick allocation.
+    scan: Arc<Scan>,
+    /// Only when cones are traced.
+    mips: Option<Arc<VoxelMips>>,
+}
+
+impl VoxelShared {
+    fn new(ctx: &Arc<Context>, scene: &Scene, needs: VoxelNeeds) -> GpuResult<VoxelShared> {
+        let volumes = Arc::new(VoxelVolumes::new(ctx, scene, needs)?);
+        Ok(VoxelShared {
+            keeper: ListKeeper::new(ctx, &volumes)?,
+            scan: Arc::new(Scan::new(ctx, &volumes)?),
+            mips: volumes.needs.cones.then(|| VoxelMips::new(ctx, &volumes)).transpose()?,
+            volumes,
+        })
+    }
+}
+
+/// What one frame leaves for the next, made once per renderer and shared by every copy of the
+/// frame's passes (`async-pipelined` keeps one copy per frame in flight; its images equal
+/// `sync`'s because everything that carries over from frame to frame lives here): the voxel
+/// volumes and work lists, the scene's acceleration structures, the automatic exposure's state
+/// and the ray-traced reflections' history.
+pub struct Carried {
+    /// Only with `gi.mode = "vct"` or a voxel view.
+    pub voxels: Option<VoxelShared>,
+    /// Only where rays are traced (`gi.specular` or `gi.shadows` = "rt").
+    pub rays: Option<Arc<SceneRays>>,
+    /// The EV the tone map adds with `render.exposure = "auto"`, eased from frame to frame.
+    pub exposure: Arc<Buffer>,
+    /// Only with ray-traced reflections: the reflections averaged over the frames the view and
+    /// the scene stood still (at the traced resolution).
+    pub reflection_history: Option<Arc<Image>>,
+}
+
+impl Carried {
+    /// What the frame of `plan` carries over, created (the acceleration structures built) now.
+    pub fn new(ctx: &Arc<Context>, (scene, plan): (&Scene, &FramePlan), scene_gpu: &SceneGpu) -> GpuResult<Carried> {
+        refuse_rays_without_queries(ctx, &scene.settings)?;
+        let voxels = plan.voxels.map(|needs| VoxelShared::new(ctx, scene, needs)).transpose()?;
+        let rays = match plan.rays() {
+            true => Some(Arc::new(SceneRays::new(ctx, scene, scene_gpu, scene.settings.time)?)),
+            false => None,
+        };
+        let reflection_history = match (plan.rt_reflections && plan.specular, plan.cones) {
+            (true, true) => Some(RtReflectPass::history(ctx, plan.reduced())?),
+            _ => None,
+        };
+        Ok(Carried { voxels, rays, exposure: ExposurePasses::state(ctx)?, reflection_history })
     }
 }
 
@@ -201,13 +256,10 @@ pub struct RayPasses {
 }
 
 impl RayPasses {
-    /// Where the frame traces rays (`FramePlan::rays`): the scene's structures, built now.
-    fn new(ctx: &Arc<Context>, scene: &Scene, scene_gpu: &SceneGpu, plan: &FramePlan) -> GpuResult<Option<RayPasses>> {
-        if !plan.rays() {
-            return Ok(None);
-        }
-        let rays = Arc::new(SceneRays::new(ctx, scene, scene_gpu, scene.settings.time)?);
-        Ok(Some(RayPasses { build: rays.dynamic.then(|| TopLevelBuildPass::new(&rays)), scene: rays }))
+    /// Where the frame traces rays (`FramePlan::rays`): the scene's structures (`Carried`).
+    fn new(carried: &Carried) -> Option<RayPasses> {
+        let rays = carried.rays.as_ref()?;
+        Some(RayPasses { build: rays.dynamic.then(|| TopLevelBuildPass::new(rays)), scene: rays.clone() })
     }
 }
 
@@ -222,7 +274,7 @@ impl ConePasses {
         gbuffer: &Arc<GBuffer>,
         volumes: &Arc<VoxelVolumes>,
         placeholders: &Arc<GiPlaceholders>,
-        rays: Option<&Arc<SceneRays>>,
+        carried: &Carried,
     ) -> GpuResult<ConePasses> {
         let s = &scene.settings;
         let (width, height) = plan.internal;
@@ -239,15 +291,14 @@ impl ConePasses {
         };
         // With rays the cone tracer leaves the specular target to the reflection pass.
         let traced = GiTargets { specular: if rt { None } else { low.specular.clone() }, ..low.clone() };
-        let reflect = match (rt, &low.specular, rays) {
-            (true, Some(target), Some(rays)) => Some(RtReflectPass::new(
+        let reflect = match (rt, &low.specular, &carried.rays, &carried.reflection_history) {
+            (true, Some(target), Some(rays), Some(history)) => Some(RtReflectPass::new(
                 ctx,
                 frame,
                 gbuffer,
                 volumes,
-                scene_gpu,
-                rays,
-                target,
+                (scene_gpu, rays),
+                (target, history),
                 (s.gi.specular_rays, s.gi.rt_hit_indirect),
             )?),
             _ => None,
@@ -584,29 +635,33 @@ pub struct FrameState {
     /// The first bounce gathers the bounced radiance of the previous update (feedback) rather
     /// than this update's direct light.
     pub feed_back: bool,
+    /// `async-pipelined`: the maps and the G-buffer are recorded before the voxel updates
+    /// ([`FramePasses::list`]).
+    pub raster_first: bool,
 }
 
 impl FramePasses {
-    /// Every pass of `plan`, the frame of `scene`.
+    /// Every pass of `plan`, the frame of `scene`: one copy, with its own targets and maps,
+    /// reading its own `frame` data, over what every copy shares (`carried`).
     pub fn new(
         ctx: &Arc<Context>,
         (scene, plan): (&Scene, &FramePlan),
         scene_gpu: &Arc<SceneGpu>,
         frame: &FrameBuffers,
+        carried: &Carried,
     ) -> GpuResult<FramePasses> {
         let s = &scene.settings;
-        refuse_rays_without_queries(ctx, s)?;
         let (width, height) = plan.internal;
         let gbuffer = Arc::new(GBuffer::new(ctx, width, height)?);
         let atlas = shadow_atlas(ctx, s.shadow_map_size, plan.shadow_views)?;
         let (radiance, display, resolve) = output_images(ctx, s)?;
         let shown = resolve.as_ref().map_or(&radiance, |r| &r.resolved).clone();
-        let voxels = match plan.voxels {
-            Some(needs) => Some(VoxelPasses::new(ctx, scene, scene_gpu, frame, (&atlas, needs))?),
+        let voxels = match &carried.voxels {
+            Some(shared) => Some(VoxelPasses::new(ctx, scene, scene_gpu, frame, (&atlas, shared))?),
             None => None,
         };
         let placeholders = Arc::new(GiPlaceholders::new(ctx)?);
-        let rays = RayPasses::new(ctx, scene, scene_gpu, plan)?;
+        let rays = RayPasses::new(carried);
         let cones = match (&voxels, plan.cones) {
             (Some(v), true) => Some(ConePasses::new(
                 ctx,
@@ -616,7 +671,7 @@ impl FramePasses {
                 &gbuffer,
                 &v.volumes,
                 &placeholders,
-                rays.as_ref().map(|r| &r.scene),
+                carried,
             )?),
             _ => None,
         };
@@ -639,7 +694,7 @@ impl FramePasses {
         let shading = Shading::new(ctx, scene, frame, voxels.as_ref(), lit)?;
         let views = plan.shadow_views;
         let shadow = (views > 0).then(|| ShadowMaps::new(ctx, scene_gpu, frame, &atlas, views)).transpose()?;
-        let exposure = ExposurePasses::new(ctx, frame, &shown)?;
+        let exposure = ExposurePasses::new(ctx, frame, &shown, &carried.exposure)?;
         let targets = FrameTargets {
             gbuffer: gbuffer.clone(),
             shadow_atlas: atlas.clone(),
@@ -679,12 +734,22 @@ impl FramePasses {
         }
     }
 
-    /// The voxel volumes and the cone tracer's targets that exist.
+    /// The voxel volumes and the cone tracer's (or the RSM's) targets that exist.
     pub fn gi_images(&self) -> Vec<&Arc<Image>> {
         let mut out = Vec::new();
         if let Some(v) = &self.voxels {
             out.extend(v.volumes.all());
         }
+        let targets = self.targets.all().len();
+        out.extend(self.own_images().into_iter().skip(targets));
+        out
+    }
+
+    /// The images this copy of the frame has for itself (every copy has its own): the 2D
+    /// targets, the cone tracer's or the RSM's targets, the reflective shadow maps and the
+    /// propagation volume; not the voxel volumes, which every copy shares (`Carried`).
+    pub fn own_images(&self) -> Vec<&Arc<Image>> {
+        let mut out = self.targets.all();
         if let Some(c) = &self.cones {
             out.extend(c.low.all());
             out.extend(c.upsample.iter().flat_map(|u| u.targets.all()));
@@ -693,6 +758,11 @@ impl FramePasses {
             out.extend(r.images());
         }
         out
+    }
+
+    /// GPU memory of [`FramePasses::own_images`], bytes.
+    pub fn own_bytes(&self) -> u64 {
+        self.own_images().iter().map(|i| i.bytes).sum()
     }
 
     /// Create the readback passes if they do not exist yet.
@@ -759,62 +829,95 @@ impl FramePasses {
         self.shadow.is_some() && (self.relights(state) || direct)
     }
 
-    /// The frame, in dependency order. Every schedule mode runs this list; the scheduler
-    /// only decides which queue each pass goes to.
+    /// The frame, in dependency order. Every schedule mode runs these passes; the scheduler
+    /// only decides which queue each goes to. With `state.raster_first` (async-pipelined) the
+    /// maps and the G-buffer come before the voxel updates, so the graphics queue draws them
+    /// while it would otherwise wait for the previous frame's voxel light (whose reads of the
+    /// voxels the revoxelization must follow).
     pub fn list(&self, state: FrameState) -> Vec<&dyn Pass> {
-        let mut passes: Vec<&dyn Pass> = vec![&self.upload];
-        if let Some(v) = &self.voxels {
-            if !state.static_voxelized {
-                passes.push(&v.clear);
-                BrickPasses::push(&v.bricks_static, &mut passes);
-                passes.push(&v.voxelize_static);
-                passes.push(&v.resolve_static);
-                passes.push(&v.list_static);
-            }
-            if let (true, Some(d)) = (state.revoxelize || !state.static_voxelized, &v.dynamic) {
-                passes.push(&d.clear);
-                BrickPasses::push(&d.bricks, &mut passes);
-                passes.push(&d.voxelize);
-                passes.push(&d.list);
-                passes.push(&d.resolve);
-            }
-        }
-        let relight = self.relights(state);
+        let voxelization = self.voxelization(state);
+        let mut maps: Vec<&dyn Pass> = Vec::new();
         if let (true, Some(shadow)) = (self.samples_shadow_maps(state), &self.shadow) {
-            shadow.push(&mut passes);
+            shadow.push(&mut maps);
         }
         if let Some(r) = &self.rsm {
-            passes.extend(r.before_gbuffer());
+            maps.extend(r.before_gbuffer());
         }
         // The voxel illumination chain: direct light, mips, bounces (each with its mips).
-        let mut voxel_lighting = if relight { self.voxel_lighting(state) } else { Vec::new() };
+        let mut voxel_lighting = if self.relights(state) { self.voxel_lighting(state) } else { Vec::new() };
         // Lagged: this frame's cones read the radiance of the previous update, and the new
         // radiance is computed after them (overlapping the rest of the frame's graphics work).
         let lagged = state.lagged && state.static_voxelized && self.cones.is_some();
+        let (mut raster, shading) = self.shading();
+        let mut passes: Vec<&dyn Pass> = vec![&self.upload];
+        if state.raster_first {
+            passes.extend(maps.into_iter().chain(raster.drain(..)).chain(voxelization));
+        } else {
+            passes.extend(voxelization.into_iter().chain(maps));
+        }
         if !lagged {
             passes.append(&mut voxel_lighting);
         }
-        match &self.shading {
-            Shading::Lighting(lighting) => {
-                if let Some(build) = self.top_level_build() {
-                    passes.push(build);
-                }
-                passes.push(&self.gbuffer);
-                if let Some(r) = &self.rt_shadow {
-                    passes.push(r);
-                }
-                if let Some(c) = &self.cones {
-                    c.push(&mut passes);
-                }
-                if let Some(r) = &self.rsm {
-                    passes.extend(r.after_gbuffer());
-                }
-                passes.push(lighting);
-            }
-            // A voxel view needs no G-buffer.
-            Shading::VoxelView(view) => passes.push(view),
-            Shading::MipView(view) => passes.push(view),
+        passes.append(&mut raster);
+        passes.extend(shading);
+        self.push_tail(state, &mut passes);
+        passes.append(&mut voxel_lighting);
+        passes
+    }
+
+    /// Voxelizing the static geometry (the first frame) and the dynamic objects (when the
+    /// update policy says so).
+    fn voxelization(&self, state: FrameState) -> Vec<&dyn Pass> {
+        let mut passes: Vec<&dyn Pass> = Vec::new();
+        let Some(v) = &self.voxels else { return passes };
+        if !state.static_voxelized {
+            passes.push(&v.clear);
+            BrickPasses::push(&v.bricks_static, &mut passes);
+            passes.push(&v.voxelize_static);
+            passes.push(&v.resolve_static);
+            passes.push(&v.list_static);
         }
+        if let (true, Some(d)) = (state.revoxelize || !state.static_voxelized, &v.dynamic) {
+            passes.push(&d.clear);
+            BrickPasses::push(&d.bricks, &mut passes);
+            passes.push(&d.voxelize);
+            passes.push(&d.list);
+            passes.push(&d.resolve);
+        }
+        passes
+    }
+
+    /// The shading: the rasterized part (the top level's rebuild and the G-buffer; none for a
+    /// voxel view), then what shades its pixels (shadow rays, cones, the RSM's gather and
+    /// volume, the deferred lighting; or the voxel view).
+    fn shading(&self) -> (Vec<&dyn Pass>, Vec<&dyn Pass>) {
+        let lighting = match &self.shading {
+            Shading::Lighting(lighting) => lighting,
+            // A voxel view needs no G-buffer.
+            Shading::VoxelView(view) => return (Vec::new(), vec![view]),
+            Shading::MipView(view) => return (Vec::new(), vec![view]),
+        };
+        let mut raster: Vec<&dyn Pass> = Vec::new();
+        if let Some(build) = self.top_level_build() {
+            raster.push(build);
+        }
+        raster.push(&self.gbuffer);
+        let mut shading: Vec<&dyn Pass> = Vec::new();
+        if let Some(r) = &self.rt_shadow {
+            shading.push(r);
+        }
+        if let Some(c) = &self.cones {
+            c.push(&mut shading);
+        }
+        if let Some(r) = &self.rsm {
+            shading.extend(r.after_gbuffer());
+        }
+        shading.push(lighting);
+        (raster, shading)
+    }
+
+    /// After the shading: the resolve, the exposure, the tone map and the read-back copies.
+    fn push_tail<'a>(&'a self, state: FrameState, passes: &mut Vec<&'a dyn Pass>) {
         if let Some(r) = &self.resolve {
             passes.push(r);
         }
@@ -828,8 +931,6 @@ impl FramePasses {
             passes.push(&r.display);
             passes.push(&r.host);
         }
-        passes.append(&mut voxel_lighting);
-        passes
     }
 }
 
@@ -865,7 +966,10 @@ fn frame_upload(frame: &FrameBuffers, scene_gpu: &SceneGpu, rays: Option<&RayPas
 
 /// The shadow maps of `views` views of `size`² texels, one layer each (copied to and from: the
 /// static casters' cache goes into the maps, and tests read them back). Without shadowed
-/// lights the lighting pass still binds a 1x1 placeholder map.
+/// lights the lighting pass still binds a 1x1 placeholder map. Shared by both families at once
+/// (`ImageDesc::concurrent`): drawn in part on graphics (the views whose inputs changed) and
+/// read on compute (voxel light, deferred lighting), a map would otherwise come back to
+/// graphics by a release recorded after all the compute work submitted since.
 fn shadow_atlas(ctx: &Arc<Context>, size: u32, views: u32) -> GpuResult<Arc<Image>> {
     let (size, layers) = if views > 0 { (size, views) } else { (1, 1) };
     let usage = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
@@ -873,7 +977,8 @@ fn shadow_atlas(ctx: &Arc<Context>, size: u32, views: u32) -> GpuResult<Arc<Imag
         | vk::ImageUsageFlags::TRANSFER_SRC
         | vk::ImageUsageFlags::TRANSFER_DST;
     let name = if views > 0 { "shadow maps" } else { "shadow map placeholder" };
-    Image::new(ctx, name, ImageDesc::d2_array(SHADOW_FORMAT, size, size, layers, usage)).map(Arc::new)
+    let desc = ImageDesc { concurrent: true, ..ImageDesc::d2_array(SHADOW_FORMAT, size, size, layers, usage) };
+    Image::new(ctx, name, desc).map(Arc::new)
 }
 
 /// The indirect light the lighting pass composes: the traced cones (and rays), else the RSM

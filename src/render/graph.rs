@@ -25,6 +25,12 @@ pub trait Pass {
     fn queue(&self) -> QueueKind {
         QueueKind::Graphics
     }
+    /// The queue in `async-pipelined`: as [`Pass::queue`], but the compute and transfer work of
+    /// the frame's tail (deferred lighting, resolve, exposure, tone map, read-back copies)
+    /// joins the GI on the compute queue, so the graphics queue never waits for a frame's GI.
+    fn pipelined_queue(&self) -> QueueKind {
+        self.queue()
+    }
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer);
     /// Binary semaphores the submit holding this pass must wait for or signal (a viewer's
     /// swapchain image: acquired before it is drawn, handed to the presentation engine after).
@@ -88,11 +94,14 @@ impl QueueKind {
 pub struct ResKey {
     pub id: u64,
     pub is_image: bool,
+    /// An image both families share at once (`Image::concurrent`): no ownership transfers.
+    pub concurrent: bool,
 }
 
 impl Res<'_> {
     pub fn res_key(&self) -> ResKey {
-        ResKey { id: self.key(), is_image: matches!(self, Res::Image(_)) }
+        let concurrent = matches!(self, Res::Image(i) if i.concurrent);
+        ResKey { id: self.key(), is_image: matches!(self, Res::Image(_)), concurrent }
     }
 }
 
@@ -276,7 +285,7 @@ impl<'a> PlannedUse<'a> {
         let layout_change =
             key.is_image && next_layout != vk::ImageLayout::UNDEFINED && (discard || next_layout != st.layout);
         let next_writes = writes(next);
-        let transfer = key.is_image && tracker.families.is_some() && st.owner == Some(o) && !discard;
+        let transfer = key.is_image && !key.concurrent && tracker.families.is_some() && st.owner == Some(o) && !discard;
         let cross = st.touched(o) && (st.writer == Some(o) || next_writes || layout_change || transfer);
         let prev_q = st.all(q);
         PlannedUse {
@@ -429,8 +438,8 @@ mod tests {
     use Access::*;
     use QueueKind::{Compute as C, Graphics as G};
 
-    const IMG: ResKey = ResKey { id: 1, is_image: true };
-    const BUF: ResKey = ResKey { id: 2, is_image: false };
+    const IMG: ResKey = ResKey { id: 1, is_image: true, concurrent: false };
+    const BUF: ResKey = ResKey { id: 2, is_image: false, concurrent: false };
 
     /// Plan and commit one use; returns the transition.
     fn use_(
@@ -505,6 +514,25 @@ mod tests {
         let t = use_(&mut tr, BUF, &[TransferWrite], false, G, 2);
         let b = t.barriers[0].1;
         assert!(b.src_stage.contains(S::COMPUTE_SHADER | S::FRAGMENT_SHADER), "waits for every read");
+    }
+
+    #[test]
+    fn a_concurrent_image_moves_between_families_without_transfers() {
+        // The voxel volumes (`ImageDesc::concurrent`): written on graphics, read on compute,
+        // written again on graphics in the next frame. Each use waits only for the other
+        // queue's last use of it; no release is recorded after the other queue's later work.
+        let vol = ResKey { id: 3, is_image: true, concurrent: true };
+        let mut tr = StateTracker::new(Some([0, 2]));
+        use_(&mut tr, vol, &[FragmentShaderWrite], true, G, 4);
+        let t = use_(&mut tr, vol, &[ComputeShaderReadStorage], false, C, 9);
+        assert_eq!(t.wait, Some(4));
+        assert!(t.releases.is_empty(), "{:?}", t.releases);
+        let b = t.barriers.first().map(|b| b.1);
+        assert!(b.is_none_or(|b| b.src_family == vk::QUEUE_FAMILY_IGNORED), "{b:?}");
+        let t = use_(&mut tr, vol, &[FragmentShaderWrite], false, G, 5);
+        assert_eq!(t.wait, Some(9), "the write waits for the read on compute (write after read)");
+        assert!(t.releases.is_empty(), "{:?}", t.releases);
+        assert!(t.barriers.iter().all(|(_, b)| b.src_family == vk::QUEUE_FAMILY_IGNORED));
     }
 
     #[test]

@@ -24,7 +24,7 @@ use crate::gpu::{Buffer, Context, GpuError, GpuResult};
 use crate::scene::{Motion, Scene, ToneMap};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
-use frame::{FramePasses, FrameState};
+use frame::{Carried, FramePasses, FrameState};
 use gpu_allocator::MemoryLocation;
 use graph::Pass;
 use passes::upload::Upload;
@@ -62,6 +62,27 @@ pub struct FrameBuffers {
     pub uniforms: Arc<Buffer>,
     pub lights: Arc<Buffer>,
     pub shadow_views: Arc<Buffer>,
+}
+
+impl FrameBuffers {
+    /// The buffers for `scene`'s lights and `shadow_views` shadow-map views (every view the
+    /// lights have, whether or not the frame draws their maps: the upload writes them all).
+    fn new(ctx: &Arc<Context>, scene: &Scene, shadow_views: u32) -> GpuResult<FrameBuffers> {
+        let written = |usage| usage | vk::BufferUsageFlags::TRANSFER_DST;
+        let buffer = |name: &str, size: usize, usage| {
+            Buffer::new(ctx, name, size as u64, written(usage), MemoryLocation::GpuOnly).map(Arc::new)
+        };
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        Ok(FrameBuffers {
+            uniforms: buffer("frame uniforms", size_of::<FrameUniforms>(), vk::BufferUsageFlags::UNIFORM_BUFFER)?,
+            lights: buffer("lights", scene.lights.len().max(1) * size_of::<lights::GpuLight>(), storage)?,
+            shadow_views: buffer(
+                "shadow views",
+                shadow_views.max(1) as usize * size_of::<lights::GpuShadowView>(),
+                storage,
+            )?,
+        })
+    }
 }
 
 /// The rendered frame read back to the host.
@@ -111,7 +132,18 @@ pub struct Renderer {
     pub ctx: Arc<Context>,
     pub scene: Scene,
     scene_gpu: Arc<SceneGpu>,
-    passes: FramePasses,
+    /// What frames carry over to the next, shared by every copy of the frame's passes.
+    carried: Carried,
+    /// The frame's passes: one copy, or with `async-pipelined` one per frame in flight (frame
+    /// `i` runs copy `i mod n`), each with its own targets, maps and frame data.
+    copies: Vec<FramePasses>,
+    /// The copy of the frame being rendered or, between frames, of the next.
+    copy: usize,
+    /// The copy of the last frame rendered (what a pipelined viewer shows with the next).
+    shown: Option<usize>,
+    /// The copy of the last frame read back ([`Renderer::output`]).
+    read_back: usize,
+    frames_in_flight: u32,
     scheduler: Scheduler,
     width: u32,
     height: u32,
@@ -177,45 +209,25 @@ impl Renderer {
                 s.shadow_map_size
             )));
         }
-        let shadow_views = lights::shadow_view_count(&scene);
         let plan = FramePlan::of(&scene);
-        // Refuse what cannot fit before allocating anything.
-        budget::Estimate::on_plan(ctx, &scene, &plan).check(ctx, &scene)?;
+        // Refuse what cannot fit before allocating anything (async-pipelined: with a copy of
+        // the frame's own resources per frame in flight).
+        let copies = if options.mode.per_frame_copies() { options.frames_in_flight } else { 1 };
+        budget::Estimate::on_plan(ctx, &scene, &plan).with_copies(copies).check(ctx, &scene)?;
         let scene_gpu = Arc::new(SceneGpu::new(ctx, &scene)?);
-        let frame_buffers = FrameBuffers {
-            uniforms: Buffer::new(
-                ctx,
-                "frame uniforms",
-                std::mem::size_of::<FrameUniforms>() as u64,
-                vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuOnly,
-            )?
-            .into(),
-            lights: Buffer::new(
-                ctx,
-                "lights",
-                (scene.lights.len().max(1) * std::mem::size_of::<lights::GpuLight>()) as u64,
-                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuOnly,
-            )?
-            .into(),
-            shadow_views: Buffer::new(
-                ctx,
-                "shadow views",
-                (shadow_views.max(1) as usize * std::mem::size_of::<lights::GpuShadowView>()) as u64,
-                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuOnly,
-            )?
-            .into(),
-        };
-        let passes = FramePasses::new(ctx, (&scene, &plan), &scene_gpu, &frame_buffers)?;
+        let carried = Carried::new(ctx, (&scene, &plan), &scene_gpu)?;
         let scheduler = Scheduler::new(ctx, options.mode, options.frames_in_flight)?;
         let radiance_scale = lights::radiance_scale(&scene);
-        Ok(Renderer {
+        let mut r = Renderer {
             ctx: ctx.clone(),
             scene,
             scene_gpu,
-            passes,
+            carried,
+            copies: Vec::new(),
+            copy: 0,
+            shown: None,
+            read_back: 0,
+            frames_in_flight: options.frames_in_flight,
             scheduler,
             width,
             height,
@@ -231,7 +243,21 @@ impl Renderer {
             voxel_updates: 0,
             history: ReflectionHistory::default(),
             exposure_easing: None,
-        })
+        };
+        r.make_copies(plan)?;
+        Ok(r)
+    }
+
+    /// The copies of the frame's passes the mode needs: one per frame in flight for
+    /// `async-pipelined`, else one (copies made before stay: a mode switch keeps them).
+    fn make_copies(&mut self, plan: FramePlan) -> GpuResult<()> {
+        let want = if self.scheduler.mode().per_frame_copies() { self.frames_in_flight as usize } else { 1 };
+        while self.copies.len() < want {
+            let frame = FrameBuffers::new(&self.ctx, &self.scene, lights::shadow_view_count(&self.scene))?;
+            let passes = FramePasses::new(&self.ctx, (&self.scene, &plan), &self.scene_gpu, &frame, &self.carried)?;
+            self.copies.push(passes);
+        }
+        Ok(())
     }
 
     /// Track a swapchain `image` as in the presentation engine's hands: the first frame that
@@ -240,10 +266,35 @@ impl Renderer {
         self.scheduler.adopt_presented(image);
     }
 
-    /// The frame's display image (tone-mapped, sRGB-encoded RGBA8 in a UNORM format) that a
-    /// viewer presents.
+    /// The passes of the frame being rendered or, between frames, of the next.
+    fn passes(&self) -> &FramePasses {
+        &self.copies[self.copy]
+    }
+
+    /// The display image (tone-mapped, sRGB-encoded RGBA8 in a UNORM format) that a viewer
+    /// presents with the next frame: that frame's own, or in `async-pipelined` the last
+    /// frame's (one frame of latency, [`Mode::latency_frames`]; the next frame's tail is still
+    /// running on the compute queue when its graphics work is done).
     pub fn display_image(&self) -> &Arc<crate::gpu::Image> {
-        &self.passes.tonemap.display
+        let latency = self.scheduler.mode().latency_frames() > 0;
+        let copy = self.shown.filter(|_| latency).unwrap_or(self.next_copy());
+        &self.copies[copy].tonemap.display
+    }
+
+    /// The copy the next frame runs.
+    fn next_copy(&self) -> usize {
+        (self.frame_index % self.copies.len() as u64) as usize
+    }
+
+    /// GPU memory of the frame's extra copies (`async-pipelined`: every copy after the first,
+    /// its targets and maps), bytes; 0 with one copy.
+    pub fn copies_bytes(&self) -> u64 {
+        self.copies[1..].iter().map(FramePasses::own_bytes).sum()
+    }
+
+    /// How many copies of the frame's passes exist (1, or the frames in flight).
+    pub fn copy_count(&self) -> usize {
+        self.copies.len()
     }
 
     pub fn size(&self) -> (u32, u32) {
@@ -252,12 +303,12 @@ impl Renderer {
 
     /// What the scene's frame needs (decided once, when the renderer was made).
     pub fn plan(&self) -> &FramePlan {
-        &self.passes.plan
+        &self.passes().plan
     }
 
     /// Names of the passes the next frame runs, in order.
     pub fn pass_names(&self, readback: bool) -> Vec<String> {
-        self.passes.list(self.frame_state(readback)).iter().map(|p| p.name().to_string()).collect()
+        self.passes().list(self.frame_state(readback)).iter().map(|p| p.name().to_string()).collect()
     }
 
     fn frame_state(&self, readback: bool) -> FrameState {
@@ -277,6 +328,7 @@ impl Renderer {
             relight: due || self.lights_changed,
             readback,
             lagged: self.scheduler.mode() == Mode::AsyncLagged,
+            raster_first: self.scheduler.mode() == Mode::AsyncPipelined,
             bounces,
             feed_back,
             auto_exposure: self.scene.settings.exposure_auto,
@@ -306,7 +358,7 @@ impl Renderer {
         if !self.scene.settings.exposure_auto {
             return None;
         }
-        self.passes.exposure.chosen()
+        self.passes().exposure.chosen()
     }
 
     /// Names of the passes the last rendered frame ran, in order.
@@ -335,18 +387,22 @@ impl Renderer {
 
     /// The voxel volumes, when the scene has them.
     pub fn voxels(&self) -> Option<&voxel::VoxelVolumes> {
-        self.passes.voxels.as_ref().map(|v| &*v.volumes)
+        self.passes().voxels.as_ref().map(|v| &*v.volumes)
     }
 
-    /// The voxel volumes and cone-tracing targets this scene created (for `info` and tests).
+    /// The voxel volumes and cone-tracing targets this scene created (for `info` and tests;
+    /// the first copy's targets).
     pub fn images(&self) -> Vec<Arc<crate::gpu::Image>> {
-        self.passes.gi_images().into_iter().cloned().collect()
+        self.copies[0].gi_images().into_iter().cloned().collect()
     }
 
     /// Every image of the frame: the 2D targets (G-buffer, shadow maps, radiance, display),
-    /// then the voxel volumes and cone-tracing targets (for robustness tests).
+    /// then the voxel volumes and cone-tracing targets, then the other copies' own images (for
+    /// robustness tests).
     pub fn all_images(&self) -> Vec<Arc<crate::gpu::Image>> {
-        self.passes.targets.all().into_iter().cloned().chain(self.images()).collect()
+        let first = self.copies[0].targets.all().into_iter().cloned().chain(self.images());
+        let others = self.copies[1..].iter().flat_map(|c| c.own_images().into_iter().cloned());
+        first.chain(others).collect()
     }
 
     /// `bench --raster-profile` (`render::raster_profile`): `rounds` times, the frame's G-buffer
@@ -357,7 +413,7 @@ impl Renderer {
         use passes::gbuffer::GBufferVariant;
         use raster_profile::{Counted, RasterPassSamples, StatisticsPool};
         let ctx = self.ctx.clone();
-        let full = &self.passes.gbuffer;
+        let full = &self.copies[0].gbuffer;
         let prepass = full.with_variant(&ctx, GBufferVariant::DepthPrepass)?;
         let over = full.with_variant(&ctx, GBufferVariant::OverPrepass)?;
         let pool = if ctx.info.optional.pipeline_statistics_query { Some(StatisticsPool::new(&ctx, 2)?) } else { None };
@@ -408,9 +464,12 @@ impl Renderer {
         self.scheduler.mode()
     }
 
-    /// Change the schedule mode between frames (same passes, same resources).
-    pub fn set_mode(&mut self, mode: Mode) {
+    /// Change the schedule mode between frames (same passes; `async-pipelined` adds a copy of
+    /// the frame's own resources per frame in flight the first time it is chosen).
+    pub fn set_mode(&mut self, mode: Mode) -> GpuResult<()> {
         self.scheduler.set_mode(mode);
+        let plan = self.passes().plan.clone();
+        self.make_copies(plan)
     }
 
     /// Host-time every pass of the following frames (each pass submitted alone and waited
@@ -463,7 +522,7 @@ impl Renderer {
             voxel: [0; 4],
             exposure: [if s.exposure_auto { 1.0 } else { 0.0 }, exposure_step, 0.0, 0.0],
         };
-        let upload = &self.passes.upload;
+        let upload = &self.copies[self.copy].upload;
         let bounds = self.scene.world_bounds(t);
         let (lights, views) = lights::build(&self.scene, t, bounds, s.shadow_map_size, s.shadow_filter_radius);
         let bytes: &[u8] = bytemuck::cast_slice(&lights);
@@ -476,7 +535,7 @@ impl Renderer {
         upload.set(Upload::ShadowViews, bytemuck::cast_slice(&views));
         let instances = self.scene_gpu.instance_bytes(&self.scene, t);
         upload.set(Upload::Instances, &instances);
-        if let Some(r) = self.passes.rays().filter(|r| r.build.is_some()) {
+        if let Some(r) = self.passes().rays().filter(|r| r.build.is_some()) {
             upload.set(Upload::TopInstances, &r.scene.instance_bytes(&self.scene, &self.scene_gpu, t));
         }
         Written { lights_moved, views, instances }
@@ -506,8 +565,10 @@ impl Renderer {
     pub fn render_with(&mut self, t: f32, readback: bool, extra: &[&dyn Pass]) -> GpuResult<FrameStats> {
         let start = Instant::now();
         let ctx = self.ctx.clone();
+        self.copy = self.next_copy();
         if readback {
-            self.passes.ensure_readback(&ctx)?;
+            self.copies[self.copy].ensure_readback(&ctx)?;
+            self.read_back = self.copy;
         }
         let frame = self.frame_index;
         self.scheduler.begin(Some(frame))?;
@@ -515,42 +576,44 @@ impl Renderer {
         let history = self.reflection_history(t, written.lights_moved);
         let state = self.frame_state(readback);
         if std::mem::take(&mut self.redraw_requested) {
-            self.passes.forget_reuse();
+            self.copies.iter().for_each(FramePasses::forget_reuse);
         }
-        if let (true, Some(shadow)) = (self.passes.samples_shadow_maps(state), &self.passes.shadow) {
+        if let (true, Some(shadow)) = (self.passes().samples_shadow_maps(state), &self.passes().shadow) {
             shadow.plan(&written.views, &written.instances);
         }
-        if let Some(r) = &self.passes.rsm {
+        if let Some(r) = &self.passes().rsm {
             r.plan(&written.views, &self.last_lights, &written.instances);
         }
         // The update counter and interleave of the bounce (uniforms written last: whether the
         // voxels relight depends on the lights just written).
         let interleave = if state.feed_back { self.scene.settings.gi.bounce_interleave } else { 1 };
         self.uniforms.voxel = [self.voxel_updates as u32, interleave, history, frame as u32];
-        self.passes.upload.set(Upload::Uniforms, bytemuck::bytes_of(&self.uniforms));
+        self.passes().upload.set(Upload::Uniforms, bytemuck::bytes_of(&self.uniforms));
         if state.relight {
             self.voxel_updates += 1;
         }
-        let mut list = self.passes.list(state);
+        let mut list = self.copies[self.copy].list(state);
         list.extend_from_slice(extra);
         self.last_passes = list.iter().map(|p| p.name().to_string()).collect();
         self.scheduler.record(&list)?;
         drop(list);
-        if let Some(shadow) = &self.passes.shadow {
+        if let Some(shadow) = &self.passes().shadow {
             shadow.recorded();
         }
-        if let Some(r) = &self.passes.rsm {
+        if let Some(r) = &self.passes().rsm {
             r.recorded();
         }
         self.scheduler.end(readback)?;
-        if self.passes.voxels.is_some() {
+        if self.passes().voxels.is_some() {
             self.static_voxelized = true;
         }
         if state.relight {
             self.lights_changed = false;
         }
         self.update_requested = false;
+        self.shown = Some(self.copy);
         self.frame_index += 1;
+        self.copy = self.next_copy();
         let timing = if readback { self.scheduler.timing_of(frame).cloned() } else { None };
         Ok(FrameStats { frame, host_ms: start.elapsed().as_secs_f64() * 1e3, timing })
     }
@@ -560,7 +623,7 @@ impl Renderer {
     /// # Panics
     /// If no frame was rendered with `readback = true`.
     pub fn output(&self) -> FrameOutput {
-        let rb = self.passes.readback.as_ref().expect("render(t, true) before output()");
+        let rb = self.copies[self.read_back].readback.as_ref().expect("render(t, true) before output()");
         FrameOutput {
             width: self.width,
             height: self.height,

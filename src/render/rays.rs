@@ -184,24 +184,21 @@ pub struct RtReflectPass {
 impl RtReflectPass {
     /// Everything the reflections read: the G-buffer, the voxels (for the light at the hits),
     /// the scene's geometry and materials, and its acceleration structures.
-    #[allow(clippy::too_many_arguments)]
+    /// The history (`history`, made by [`RtReflectPass::history`]) is shared by every copy of
+    /// the frame: it carries from frame to frame.
     pub fn new(
         ctx: &Arc<Context>,
         frame: &FrameBuffers,
         gbuffer: &Arc<GBuffer>,
         volumes: &Arc<VoxelVolumes>,
-        scene: &Arc<SceneGpu>,
-        rays: &Arc<SceneRays>,
-        target: &Arc<Image>,
+        (scene, rays): (&Arc<SceneGpu>, &Arc<SceneRays>),
+        (target, history): (&Arc<Image>, &Arc<Image>),
         (specular_rays, hit): (u32, HitIndirect),
     ) -> GpuResult<RtReflectPass> {
         let sampler = GBuffer::sampler(ctx)?;
         let lod0 = volumes.final_radiance().clone();
-        let e = target.desc.extent;
-        let usage = vk::ImageUsageFlags::STORAGE;
-        let desc = ImageDesc::d2(vk::Format::R32G32B32A32_SFLOAT, e.width, e.height, usage);
-        let history = Arc::new(Image::new(ctx, "rt reflection history", desc)?);
-        let images = RtImages { target, history: &history, lod0: &lod0 };
+        debug_assert_eq!(history.desc.extent, target.desc.extent, "the history is the size of the target");
+        let images = RtImages { target, history, lod0: &lod0 };
         let set = Self::binds(frame, gbuffer, volumes, scene, rays, images, &sampler).build(
             ctx,
             "rt reflections",
@@ -211,6 +208,13 @@ impl RtReflectPass {
         let spec = [(0, scene.materials.texture_count()), (1, specular_rays), (2, cones)];
         let pipeline = Pipeline::compute(ctx, "rt reflections", shaders::RT_REFLECT_COMP, &[set.layout()], 0, &spec)?;
         Ok(RtReflectPass { target: target.clone(), pipeline, set, _sampler: sampler })
+    }
+
+    /// The reflections' history for a target of `width` x `height`: what they average over
+    /// the frames the view and the scene stood still.
+    pub fn history(ctx: &Arc<Context>, (width, height): (u32, u32)) -> GpuResult<Arc<Image>> {
+        let desc = ImageDesc::d2(vk::Format::R32G32B32A32_SFLOAT, width, height, vk::ImageUsageFlags::STORAGE);
+        Ok(Arc::new(Image::new(ctx, "rt reflection history", desc)?))
     }
 
     /// The bindings of glsl/rt_reflect.comp, in order: the G-buffer, the voxels (for the light

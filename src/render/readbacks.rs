@@ -19,7 +19,7 @@ impl Renderer {
     pub fn download_level(&mut self, image: &Arc<Image>, level: u32) -> GpuResult<Vec<u8>> {
         let ctx = self.ctx.clone();
         let copy = passes::readback::ImageDownload::level(&ctx, image, level)?;
-        let host = passes::readback::HostReadPass { buffers: vec![copy.buffer.clone()] };
+        let host = passes::readback::HostReadPass { buffers: vec![copy.buffer.clone()], tail: false };
         self.scheduler.begin(None)?;
         self.scheduler.record(&[&copy, &host])?;
         self.scheduler.end(true)?;
@@ -28,12 +28,15 @@ impl Renderer {
 
     /// Read the work list of occupied voxels back (waits; after a frame, never inside one).
     pub fn voxel_list(&mut self) -> GpuResult<Option<voxel::ListSnapshot>> {
-        let Some(v) = self.passes.voxels.as_ref().map(|v| v.volumes.clone()) else { return Ok(None) };
+        let Some(v) = self.passes().voxels.as_ref().map(|v| v.volumes.clone()) else { return Ok(None) };
         let ctx = self.ctx.clone();
         let list = &v.list;
         let header = passes::voxel_list::BufferDownload::new(&ctx, &list.buffer, 0, voxel::work_list_header::SIZE)?;
         self.scheduler.begin(None)?;
-        self.scheduler.record(&[&header, &passes::readback::HostReadPass { buffers: vec![header.buffer.clone()] }])?;
+        self.scheduler.record(&[
+            &header,
+            &passes::readback::HostReadPass { buffers: vec![header.buffer.clone()], tail: false },
+        ])?;
         self.scheduler.end(true)?;
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(header.bytes());
         let count = u64::from(words[3]).min(list.capacity);
@@ -47,7 +50,10 @@ impl Renderer {
             None => None,
         };
         downloads.extend(stale.as_ref());
-        let host = passes::readback::HostReadPass { buffers: downloads.iter().map(|d| d.buffer.clone()).collect() };
+        let host = passes::readback::HostReadPass {
+            buffers: downloads.iter().map(|d| d.buffer.clone()).collect(),
+            tail: false,
+        };
         let mut passes: Vec<&dyn Pass> = downloads.iter().map(|d| *d as &dyn Pass).collect();
         passes.push(&host);
         self.scheduler.begin(None)?;
@@ -67,7 +73,7 @@ impl Renderer {
     /// Level `level` of a directional volume (`face` 0..6: +x, -x, +y, -y, +z, -z) as texels,
     /// whatever its layout (waits; for tests and debugging).
     pub fn download_directional(&mut self, face: usize, level: u32) -> GpuResult<Vec<u8>> {
-        let v = self.passes.voxels.as_ref().map(|v| v.volumes.clone()).expect("voxel volumes");
+        let v = self.passes().voxels.as_ref().map(|v| v.volumes.clone()).expect("voxel volumes");
         let pooled = v.bricks.as_ref().map_or(0, |b| b.directional.len() as u32);
         if level < pooled {
             let image = v.bricks.as_ref().expect("bricks").directional[level as usize][face].clone();
@@ -79,7 +85,7 @@ impl Renderer {
     /// An image of pool `pool` as the dense texels of its level (an image of a dense volume
     /// as it is).
     fn download_pooled(&mut self, image: &Arc<Image>, pool: usize) -> GpuResult<Vec<u8>> {
-        let v = self.passes.voxels.as_ref().map(|v| v.volumes.clone()).expect("voxel volumes");
+        let v = self.passes().voxels.as_ref().map(|v| v.volumes.clone()).expect("voxel volumes");
         let Some(b) = &v.bricks else { return self.download(image) };
         let pooled = self.download(image)?;
         let map: Vec<u32> = bytemuck::pod_collect_to_vec(&self.download(&b.maps[pool])?);
@@ -93,12 +99,13 @@ impl Renderer {
     /// Read the resident bricks of every pool back (waits; after a frame, never inside one).
     /// None with dense volumes.
     pub fn resident_bricks(&mut self) -> GpuResult<Option<bricks::BrickSnapshot>> {
-        let Some(v) = self.passes.voxels.as_ref().map(|v| v.volumes.clone()) else { return Ok(None) };
+        let Some(v) = self.passes().voxels.as_ref().map(|v| v.volumes.clone()) else { return Ok(None) };
         let Some(b) = &v.bricks else { return Ok(None) };
         let ctx = self.ctx.clone();
         let all = passes::voxel_list::BufferDownload::new(&ctx, &b.lists, 0, b.lists.size)?;
         self.scheduler.begin(None)?;
-        self.scheduler.record(&[&all, &passes::readback::HostReadPass { buffers: vec![all.buffer.clone()] }])?;
+        self.scheduler
+            .record(&[&all, &passes::readback::HostReadPass { buffers: vec![all.buffer.clone()], tail: false }])?;
         self.scheduler.end(true)?;
         Ok(Some(bricks::BrickSnapshot::decode(&b.layout, all.bytes())))
     }
@@ -107,7 +114,7 @@ impl Renderer {
     /// estimate, and the resident bricks of every pool (reads the lists back: after a frame,
     /// never inside one). None without voxels.
     pub fn voxel_memory(&mut self) -> GpuResult<Option<bricks::VoxelMemory>> {
-        let Some(v) = self.passes.voxels.as_ref().map(|v| v.volumes.clone()) else { return Ok(None) };
+        let Some(v) = self.passes().voxels.as_ref().map(|v| v.volumes.clone()) else { return Ok(None) };
         let images: u64 = v.all().iter().map(|i| i.bytes).sum();
         let lists = v.list.bytes() + v.bricks.as_ref().map_or(0, |b| b.lists.size);
         let dense_bytes = budget::Estimate::on_layout(&self.ctx, &self.scene, crate::scene::VoxelLayout::Dense).volumes;

@@ -33,16 +33,34 @@ pub enum Mode {
     /// As `Async`, but the cone tracer reads the voxel radiance of the previous frame, so this
     /// frame's voxel illumination overlaps the frame's graphics work after the trace.
     AsyncLagged,
+    /// As `Async`, with the frame's tail after the G-buffer (deferred lighting, resolve,
+    /// exposure, tone map, read-back copies) on the compute queue too, and one copy per frame
+    /// in flight of everything a frame writes for itself (`frame::FramePasses`): the graphics
+    /// queue draws frame N+1 while the compute queue lights and traces frame N. A viewer shows
+    /// each frame one frame later ([`Mode::latency_frames`]).
+    AsyncPipelined,
 }
 
 impl Mode {
-    pub const ALL: [Mode; 3] = [Mode::Sync, Mode::Async, Mode::AsyncLagged];
+    pub const ALL: [Mode; 4] = [Mode::Sync, Mode::Async, Mode::AsyncLagged, Mode::AsyncPipelined];
     pub fn name(self) -> &'static str {
         match self {
             Mode::Sync => "sync",
             Mode::Async => "async",
             Mode::AsyncLagged => "async-lagged",
+            Mode::AsyncPipelined => "async-pipelined",
         }
+    }
+
+    /// Frames between a frame's submission and the one whose display a viewer presents with
+    /// it: 1 for `async-pipelined` (frame N is shown while N+1's graphics work runs), else 0.
+    pub fn latency_frames(self) -> u32 {
+        u32::from(self == Mode::AsyncPipelined)
+    }
+
+    /// Whether the mode keeps one copy of the frame's own resources per frame in flight.
+    pub fn per_frame_copies(self) -> bool {
+        self == Mode::AsyncPipelined
     }
 }
 
@@ -55,10 +73,9 @@ impl fmt::Display for Mode {
 impl FromStr for Mode {
     type Err = String;
     fn from_str(s: &str) -> Result<Mode, String> {
-        Mode::ALL
-            .into_iter()
-            .find(|m| m.name() == s)
-            .ok_or_else(|| format!("unknown schedule mode '{s}' (expected sync, async or async-lagged)"))
+        Mode::ALL.into_iter().find(|m| m.name() == s).ok_or_else(|| {
+            format!("unknown schedule mode '{s}' (expected sync, async, async-lagged or async-pipelined)")
+        })
     }
 }
 
@@ -382,6 +399,7 @@ impl Scheduler {
             let started = Instant::now();
             let q = match self.mode {
                 Mode::Sync => QueueKind::Graphics,
+                Mode::AsyncPipelined => pass.pipelined_queue(),
                 _ => pass.queue(),
             };
             self.record_pass(*pass, q)?;

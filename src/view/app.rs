@@ -298,7 +298,7 @@ impl Viewer {
             Action::Schedule(m) => {
                 if let Some(gpu) = &mut self.gpu {
                     gpu.renderer.wait_idle()?;
-                    gpu.renderer.set_mode(m);
+                    gpu.renderer.set_mode(m)?;
                 }
                 self.settings.schedule = m;
             }

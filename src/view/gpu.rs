@@ -124,7 +124,7 @@ pub fn render_frame(
     let ui = UiPass { target: target.clone(), view: texture.image.clone(), acquired: a.acquired, draw: req.draw };
     let capture = req.capture_window && swapchain.readable;
     let download = if capture { Some(ImageDownload::new(&ctx, &target)?) } else { None };
-    let host = download.as_ref().map(|d| HostReadPass { buffers: vec![d.buffer.clone()] });
+    let host = download.as_ref().map(|d| HostReadPass { buffers: vec![d.buffer.clone()], tail: false });
     let present = PresentPass { target, rendered: a.rendered };
     let mut passes: Vec<&dyn Pass> = vec![&copy, &ui];
     if let (Some(d), Some(h)) = (&download, &host) {

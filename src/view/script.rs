@@ -169,7 +169,7 @@ fn parse_line(line: &str) -> Result<Command, String> {
         }
         "gi" => Command::Set { key: "gi.mode".into(), value: format!("{:?}", one("a technique")?) },
         "view" => Command::Set { key: "render.view".into(), value: format!("{:?}", one("a view")?) },
-        "schedule" => Command::Schedule(one("sync | async | async-lagged")?.parse()?),
+        "schedule" => Command::Schedule(one("sync | async | async-lagged | async-pipelined")?.parse()?),
         "preset" => Command::Preset(preset(one("low | medium | high | ultra")?)?),
         "pause" => Command::Pause(true),
         "play" => Command::Pause(false),

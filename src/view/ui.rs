@@ -250,7 +250,7 @@ fn choice(ui: &mut egui::Ui, label: &str, key: &str, current: &str, options: &[&
 fn schedule(ui: &mut egui::Ui, mode: Mode, actions: &mut Vec<Action>) {
     ui.horizontal(|ui| {
         ui.label("schedule");
-        for m in [Mode::Sync, Mode::Async, Mode::AsyncLagged] {
+        for m in Mode::ALL {
             if ui.selectable_label(mode == m, m.name()).clicked() && mode != m {
                 actions.push(Action::Schedule(m));
             }

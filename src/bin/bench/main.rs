@@ -55,7 +55,7 @@ struct Args {
     #[arg(long, value_name = "REPORT.json", conflicts_with_all = ["timeline", "serial_profile", "raster_profile"])]
     model: Option<PathBuf>,
     /// Schedule modes to compare, comma-separated.
-    #[arg(long, value_delimiter = ',', default_value = "sync,async,async-lagged")]
+    #[arg(long, value_delimiter = ',', default_value = "sync,async,async-lagged,async-pipelined")]
     modes: Vec<Mode>,
     /// Frames measured per mode (after warm-up; with --model, the report's unless given).
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=100_000))]
@@ -167,7 +167,7 @@ fn check_outputs(args: &Args) -> dvsgi::Result<()> {
         return Err(usage(format!("--timeline {}: the timeline is an SVG picture; give a .svg name", t.display())));
     }
     if args.modes.is_empty() {
-        return Err(usage("--modes: give at least one of sync, async, async-lagged".into()));
+        return Err(usage("--modes: give at least one of sync, async, async-lagged, async-pipelined".into()));
     }
     Ok(())
 }
@@ -343,6 +343,10 @@ fn print_table(ctx: &Context, r: &Report) {
             .unwrap_or("-".into())
     });
     t.row("submits per frame", &|m| format!("{:.1}", m.submits_per_frame));
+    t.row("frame copies (extra MiB)", &|m| {
+        format!("{} ({:.1})", m.frame_copies, m.frame_copies_bytes as f64 / (1024.0 * 1024.0))
+    });
+    t.row("display latency, frames", &|m| m.latency_frames.to_string());
     if let Some(o) = r.modes.iter().find_map(|m| m.occupancy) {
         outln!("occupied voxels (work list): {}", o.summary());
     }

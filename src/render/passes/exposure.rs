@@ -7,7 +7,7 @@
 
 use crate::gpu::{shaders, Access, Bind, Buffer, Context, GpuResult, Image, Pipeline};
 use crate::render::binding::{Binds, PassSet};
-use crate::render::graph::Pass;
+use crate::render::graph::{Pass, QueueKind};
 use crate::render::FrameBuffers;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
@@ -37,23 +37,36 @@ pub struct ExposurePasses {
 }
 
 impl ExposurePasses {
-    pub fn new(ctx: &Arc<Context>, frame: &FrameBuffers, radiance: &Arc<Image>) -> GpuResult<Self> {
+    /// The state the EV carries in from frame to frame, zeroed (no frame yet).
+    pub fn state(ctx: &Arc<Context>) -> GpuResult<Arc<Buffer>> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let state = Arc::new(Buffer::new(ctx, "exposure", 16, storage, MemoryLocation::GpuToCpu)?);
+        state.write(0, &[0u8; 16]);
+        Ok(state)
+    }
+
+    /// The stages over `radiance`, leaving the EV in `state` ([`ExposurePasses::state`], shared
+    /// by every copy of the frame).
+    pub fn new(
+        ctx: &Arc<Context>,
+        frame: &FrameBuffers,
+        radiance: &Arc<Image>,
+        state: &Arc<Buffer>,
+    ) -> GpuResult<Self> {
         let e = radiance.extent2d();
         let tiles = (e.width.div_ceil(TILE) * e.height.div_ceil(TILE)) as u64;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let partials = Arc::new(Buffer::new(ctx, "exposure tiles", tiles * 8, storage, MemoryLocation::GpuOnly)?);
-        let state = Arc::new(Buffer::new(ctx, "exposure", 16, storage, MemoryLocation::GpuToCpu)?);
-        state.write(0, &[0u8; 16]);
         let stage = |name: &'static str, resolve: bool| -> GpuResult<ExposurePass> {
             // The tiles read the radiance into the partial sums; the resolve reduces those
             // into the state. Each leaves the other's binding idle.
             let (buffer, write) = (Access::ComputeShaderReadBuffer, Access::ComputeShaderWrite);
             let binds = Binds::new().uniform(&frame.uniforms, buffer);
             let set = if resolve {
-                binds.idle(Bind::StorageImage(radiance.view)).storage(&partials, buffer).storage(&state, write)
+                binds.idle(Bind::StorageImage(radiance.view)).storage(&partials, buffer).storage(state, write)
             } else {
                 let read = Access::ComputeShaderReadStorage;
-                binds.storage_image(radiance, read).storage(&partials, write).idle(Bind::Storage(&state))
+                binds.storage_image(radiance, read).storage(&partials, write).idle(Bind::Storage(state))
             }
             .build(ctx, name, vk::ShaderStageFlags::COMPUTE)?;
             let spec = [(0, u32::from(resolve))];
@@ -77,6 +90,10 @@ impl ExposurePasses {
 }
 
 impl Pass for ExposurePass {
+    fn pipelined_queue(&self) -> QueueKind {
+        QueueKind::Compute
+    }
+
     fn name(&self) -> &str {
         self.name
     }

@@ -4,7 +4,7 @@ use super::gbuffer::GBuffer;
 use super::gi_trace::{GiPlaceholders, GiTargets};
 use crate::gpu::{shaders, Access, Context, GpuResult, Image, Pipeline, Sampler};
 use crate::render::binding::{Binds, PassSet};
-use crate::render::graph::Pass;
+use crate::render::graph::{Pass, QueueKind};
 use crate::render::FrameBuffers;
 use ash::vk;
 use std::sync::Arc;
@@ -116,6 +116,10 @@ impl LightingPass {
 }
 
 impl Pass for LightingPass {
+    fn pipelined_queue(&self) -> QueueKind {
+        QueueKind::Compute
+    }
+
     fn name(&self) -> &str {
         "deferred lighting"
     }

@@ -3,7 +3,7 @@
 //! other image on demand (volumes in tests and debugging).
 
 use crate::gpu::{Access, Buffer, Context, GpuResult, Image};
-use crate::render::graph::{Pass, Use};
+use crate::render::graph::{Pass, QueueKind, Use};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
@@ -25,6 +25,8 @@ pub struct ImageDownload {
     extent: vk::Extent3D,
     pub buffer: Arc<Buffer>,
     name: String,
+    /// Part of the frame's tail: on the compute queue in `async-pipelined`.
+    tail: bool,
 }
 
 impl ImageDownload {
@@ -51,6 +53,7 @@ impl ImageDownload {
             level,
             extent: e,
             name: format!("readback {} level {level}", image.name),
+            tail: false,
         })
     }
 
@@ -66,6 +69,13 @@ impl ImageDownload {
 impl Pass for ImageDownload {
     fn name(&self) -> &str {
         &self.name
+    }
+    fn pipelined_queue(&self) -> QueueKind {
+        if self.tail {
+            QueueKind::Compute
+        } else {
+            self.queue()
+        }
     }
     fn unbound(&self) -> Vec<Use<'_>> {
         vec![Use::image(&self.image, Access::TransferRead), Use::buffer(&self.buffer, Access::TransferWrite)]
@@ -94,11 +104,20 @@ impl Pass for ImageDownload {
 /// Records nothing: declares the host reads so the tracker makes the copies host-visible.
 pub struct HostReadPass {
     pub buffers: Vec<Arc<Buffer>>,
+    /// Part of the frame's tail: on the compute queue in `async-pipelined`.
+    pub tail: bool,
 }
 
 impl Pass for HostReadPass {
     fn name(&self) -> &str {
         "host read"
+    }
+    fn pipelined_queue(&self) -> QueueKind {
+        if self.tail {
+            QueueKind::Compute
+        } else {
+            self.queue()
+        }
     }
     fn unbound(&self) -> Vec<Use<'_>> {
         self.buffers.iter().map(|b| Use::buffer(b, Access::HostRead)).collect()
@@ -115,9 +134,9 @@ pub struct ReadbackPasses {
 
 impl ReadbackPasses {
     pub fn new(ctx: &Arc<Context>, radiance: &Arc<Image>, display: &Arc<Image>) -> GpuResult<Self> {
-        let radiance = ImageDownload::new(ctx, radiance)?;
-        let display = ImageDownload::new(ctx, display)?;
-        let host = HostReadPass { buffers: vec![radiance.buffer.clone(), display.buffer.clone()] };
+        let radiance = ImageDownload { tail: true, ..ImageDownload::new(ctx, radiance)? };
+        let display = ImageDownload { tail: true, ..ImageDownload::new(ctx, display)? };
+        let host = HostReadPass { buffers: vec![radiance.buffer.clone(), display.buffer.clone()], tail: true };
         Ok(ReadbackPasses { radiance, display, host })
     }
 }

@@ -3,7 +3,7 @@
 
 use crate::gpu::{shaders, Access, Context, GpuResult, Image, Pipeline};
 use crate::render::binding::{Binds, PassSet};
-use crate::render::graph::Pass;
+use crate::render::graph::{Pass, QueueKind};
 use ash::vk;
 use std::sync::Arc;
 
@@ -26,6 +26,10 @@ impl ResolvePass {
 }
 
 impl Pass for ResolvePass {
+    fn pipelined_queue(&self) -> QueueKind {
+        QueueKind::Compute
+    }
+
     fn name(&self) -> &str {
         "supersample resolve"
     }

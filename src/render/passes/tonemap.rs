@@ -3,7 +3,7 @@
 
 use crate::gpu::{shaders, Access, Buffer, Context, GpuResult, Image, Pipeline};
 use crate::render::binding::{Binds, PassSet};
-use crate::render::graph::Pass;
+use crate::render::graph::{Pass, QueueKind};
 use crate::render::FrameBuffers;
 use ash::vk;
 use std::sync::Arc;
@@ -37,6 +37,10 @@ impl TonemapPass {
 }
 
 impl Pass for TonemapPass {
+    fn pipelined_queue(&self) -> QueueKind {
+        QueueKind::Compute
+    }
+
     fn name(&self) -> &str {
         "tonemap"
     }

@@ -3,7 +3,7 @@
 
 use crate::gpu::{shaders, Access, Bind, Context, GpuResult, Image, Pipeline};
 use crate::render::binding::{Binds, PassSet};
-use crate::render::graph::Pass;
+use crate::render::graph::{Pass, QueueKind};
 use crate::render::voxel::VoxelVolumes;
 use crate::render::FrameBuffers;
 use crate::scene::{View, ViewDirection};
@@ -57,6 +57,10 @@ impl VoxelViewPass {
 }
 
 impl Pass for VoxelViewPass {
+    fn pipelined_queue(&self) -> QueueKind {
+        QueueKind::Compute
+    }
+
     fn name(&self) -> &str {
         "voxel view"
     }
@@ -114,6 +118,10 @@ impl VoxelMipViewPass {
 }
 
 impl Pass for VoxelMipViewPass {
+    fn pipelined_queue(&self) -> QueueKind {
+        QueueKind::Compute
+    }
+
     fn name(&self) -> &str {
         "voxel mip view"
     }

@@ -139,6 +139,8 @@ pub struct VoxelVolumes {
     pub bricks: Option<Bricks>,
     /// Bound in place of the brick maps and pooled levels that do not exist.
     pub map_placeholder: Arc<Image>,
+    /// Bound in place of the brick maps that do not exist by the passes that only read them.
+    pub read_placeholder: Arc<Image>,
     pub pool_placeholder: Arc<Image>,
 }
 
@@ -326,15 +328,20 @@ impl VoxelVolumes {
             scan: scan_buffer(ctx, &specs)?,
             bricks,
             map_placeholder: image("voxel brick map placeholder", &specs.map_placeholder)?,
+            read_placeholder: image("voxel brick map placeholder (read)", &specs.map_placeholder)?,
             pool_placeholder: image("voxel brick pool placeholder", &specs.pool_placeholder)?,
         })
     }
 
     /// The brick maps (`brick_maps[4]` in bricks.glsl), placeholders where there are none,
     /// touched with `access`. (Every pass that finds voxels in the bricked volumes binds them.)
+    /// A pass that only reads them binds a placeholder of its own (`read_placeholder`), so it
+    /// is not tied to the passes that write theirs (in another frame, on the other queue).
     pub fn brick_maps(&self, access: Access) -> Binds<'_> {
         let maps = self.bricks.as_ref().map_or(&[][..], |b| &b.maps[..]);
-        let bound = (0..MAX_POOLS).map(|i| maps.get(i).unwrap_or(&self.map_placeholder));
+        let writes = access.info().writes;
+        let placeholder = if writes { &self.map_placeholder } else { &self.read_placeholder };
+        let bound = (0..MAX_POOLS).map(|i| maps.get(i).unwrap_or(placeholder));
         Binds::new().storage_images(bound, access)
     }
 
@@ -359,7 +366,7 @@ impl VoxelVolumes {
         let mut v = self.full_resolution();
         v.extend(self.directional.iter());
         v.extend(self.bricks.iter().flat_map(|b| b.images()));
-        v.extend([&self.map_placeholder, &self.pool_placeholder]);
+        v.extend([&self.map_placeholder, &self.read_placeholder, &self.pool_placeholder]);
         v
     }
 
@@ -546,7 +553,7 @@ pub fn volume_bytes(ctx: Option<&Context>, format: vk::Format, extent: [u32; 3],
     if sampled {
         usage |= vk::ImageUsageFlags::SAMPLED;
     }
-    let desc = ImageDesc { mip_levels: mips, ..ImageDesc::d3_extent(format, extent, usage) };
+    let desc = ImageDesc { mip_levels: mips, concurrent: true, ..ImageDesc::d3_extent(format, extent, usage) };
     crate::gpu::memory::device_image_bytes(ctx, &desc).max(texels)
 }
 

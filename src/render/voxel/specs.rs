@@ -40,7 +40,9 @@ impl Alloc {
         if sampled {
             usage |= vk::ImageUsageFlags::SAMPLED;
         }
-        ImageDesc { mip_levels: mips, ..ImageDesc::d3_extent(format, extent, usage) }
+        // The voxelization (graphics) writes them and the voxel light (compute) reads them
+        // every update: shared by both families at once (`ImageDesc::concurrent`).
+        ImageDesc { mip_levels: mips, concurrent: true, ..ImageDesc::d3_extent(format, extent, usage) }
     }
 
     /// A buffer's bytes.
@@ -142,7 +144,8 @@ impl VolumeSpecs {
         out.extend(self.brick_lists);
         out.extend([self.scan, self.list]);
         out.extend(self.stale);
-        out.extend([self.map_placeholder, self.pool_placeholder]);
+        // The map placeholder twice: one for the passes that write, one for those that read.
+        out.extend([self.map_placeholder, self.map_placeholder, self.pool_placeholder]);
         out
     }
 }
