@@ -41,8 +41,9 @@ pub struct Estimate {
     pub shadow_maps: u64,
     /// Vertex and index buffers and textures.
     pub scene: u64,
-    /// One copy of what a frame has for itself: the targets, the shadow maps and the
-    /// propagation volumes (not in the total: see `copies`).
+    /// One copy of what a frame has for itself: the targets, the shadow maps (not the static
+    /// casters' cache, which the copies share) and the propagation volumes (not in the total:
+    /// see `copies`).
     pub frame_copy: u64,
     /// The copies beyond the first that `async-pipelined` keeps, one per frame in flight
     /// ([`Estimate::with_copies`]; 0 otherwise).
@@ -80,8 +81,13 @@ impl Estimate {
     fn sized(scene: &Scene, plan: &FramePlan, layout: VoxelLayout, bytes: &dyn Fn(&Alloc) -> u64) -> Estimate {
         let s = &scene.settings;
         let mut e = Estimate::default();
+        // The static casters' cache is one for every copy of the frame (`frame::Carried`).
+        let mut shared = 0;
         for t in plan.targets() {
             *(if t.shadow_map { &mut e.shadow_maps } else { &mut e.targets }) += t.bytes();
+            if t.name == "shadow map cache" {
+                shared += t.bytes();
+            }
         }
         let mut lpv_bytes = 0;
         if plan.rsm.as_ref().is_some_and(|r| r.lpv) {
@@ -92,7 +98,7 @@ impl Estimate {
             e.volumes += lpv_bytes;
             e.largest_volume = e.largest_volume.max(lpv);
         }
-        e.frame_copy = e.targets + e.shadow_maps + lpv_bytes;
+        e.frame_copy = e.targets + e.shadow_maps - shared + lpv_bytes;
         if let Some(needs) = plan.voxels {
             let vols: Vec<u64> = voxel_allocations(scene, needs, layout, bytes).iter().map(bytes).collect();
             e.volumes = vols.iter().sum();
@@ -262,10 +268,11 @@ mod tests {
         let e = Estimate::of(&scene);
         // albedo + normal 2 x 2048, radiance 4096, bounced radiance and the bounce's scratch
         // volume 2 x 4096, six directional chains of (64 + 8 + 1) texels x 8 bytes, and the
-        // work list's 64-byte header (no triangles: no entries), the three 1^3 placeholders
-        // (R32_UINT, RGBA16F, R8_UINT), the voxelization's seven sums (a count, albedo and
-        // normal) 7 x 2048 and the scan buffer (a 16-word header and one 8^3 brick).
-        assert_eq!(e.volumes, 2 * 2048 + 4096 + 2 * 4096 + 6 * 73 * 8 + 64 + 4 + 8 + 1 + 7 * 2048 + 4 * 17);
+        // work list's 64-byte header (no triangles: no entries), the four 1^3 placeholders
+        // (R32_UINT for the brick maps' writers and readers, RGBA16F, R8_UINT), the
+        // voxelization's seven sums (a count, albedo and normal) 7 x 2048 and the scan buffer
+        // (a 16-word header and one 8^3 brick).
+        assert_eq!(e.volumes, 2 * 2048 + 4096 + 2 * 4096 + 6 * 73 * 8 + 64 + 2 * 4 + 8 + 1 + 7 * 2048 + 4 * 17);
         assert_eq!(e.largest_volume, 4096);
         assert_eq!(e.targets, 100 * 48 + 100 * 8, "G-buffer, radiance, display, diffuse cones");
         scene.settings.gi.mode = GiMode::None;

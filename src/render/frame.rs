@@ -12,7 +12,7 @@ use super::passes::readback::ReadbackPasses;
 use super::passes::resolve::ResolvePass;
 use super::passes::rsm::{RsmGatherPass, RsmMaps, RsmPass};
 use super::passes::rt_shadow::RtShadowPass;
-use super::passes::shadow::ShadowMaps;
+use super::passes::shadow::{ShadowMaps, StaticCasterCache};
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::upload::{UploadPass, Uploads};
 use super::passes::voxel_bounce::{BounceComposePass, VoxelBouncePass};
@@ -150,6 +150,8 @@ pub struct Carried {
     /// Only with ray-traced reflections: the reflections averaged over the frames the view and
     /// the scene stood still (at the traced resolution).
     pub reflection_history: Option<Arc<Image>>,
+    /// Only with shadow maps and moving casters: the static casters' maps (graphics only).
+    pub static_casters: Option<StaticCasterCache>,
 }
 
 impl Carried {
@@ -165,7 +167,12 @@ impl Carried {
             (true, true) => Some(RtReflectPass::history(ctx, plan.reduced())?),
             _ => None,
         };
-        Ok(Carried { voxels, rays, exposure: ExposurePasses::state(ctx)?, reflection_history })
+        let s = &scene.settings;
+        let static_casters = match plan.shadow_views {
+            0 => None,
+            views => StaticCasterCache::new(ctx, scene_gpu, shadow_atlas_desc(s.shadow_map_size, views))?,
+        };
+        Ok(Carried { voxels, rays, exposure: ExposurePasses::state(ctx)?, reflection_history, static_casters })
     }
 }
 
@@ -693,7 +700,8 @@ impl FramePasses {
         };
         let shading = Shading::new(ctx, scene, frame, voxels.as_ref(), lit)?;
         let views = plan.shadow_views;
-        let shadow = (views > 0).then(|| ShadowMaps::new(ctx, scene_gpu, frame, &atlas, views)).transpose()?;
+        let cache = carried.static_casters.as_ref();
+        let shadow = (views > 0).then(|| ShadowMaps::new(ctx, (scene_gpu, frame), &atlas, views, cache)).transpose()?;
         let exposure = ExposurePasses::new(ctx, frame, &shown, &carried.exposure)?;
         let targets = FrameTargets {
             gbuffer: gbuffer.clone(),
@@ -740,16 +748,19 @@ impl FramePasses {
         if let Some(v) = &self.voxels {
             out.extend(v.volumes.all());
         }
-        let targets = self.targets.all().len();
+        let targets = self.targets.all().len() - usize::from(self.targets.shadow_cache.is_some());
         out.extend(self.own_images().into_iter().skip(targets));
         out
     }
 
     /// The images this copy of the frame has for itself (every copy has its own): the 2D
     /// targets, the cone tracer's or the RSM's targets, the reflective shadow maps and the
-    /// propagation volume; not the voxel volumes, which every copy shares (`Carried`).
+    /// propagation volume; not the voxel volumes or the static casters' cache, which every
+    /// copy shares (`Carried`).
     pub fn own_images(&self) -> Vec<&Arc<Image>> {
-        let mut out = self.targets.all();
+        let shared = self.targets.shadow_cache.as_ref();
+        let mut out: Vec<&Arc<Image>> =
+            self.targets.all().into_iter().filter(|i| shared.is_none_or(|s| !Arc::ptr_eq(i, s))).collect();
         if let Some(c) = &self.cones {
             out.extend(c.low.all());
             out.extend(c.upsample.iter().flat_map(|u| u.targets.all()));
@@ -971,14 +982,18 @@ fn frame_upload(frame: &FrameBuffers, scene_gpu: &SceneGpu, rays: Option<&RayPas
 /// read on compute (voxel light, deferred lighting), a map would otherwise come back to
 /// graphics by a release recorded after all the compute work submitted since.
 fn shadow_atlas(ctx: &Arc<Context>, size: u32, views: u32) -> GpuResult<Arc<Image>> {
+    let name = if views > 0 { "shadow maps" } else { "shadow map placeholder" };
+    Image::new(ctx, name, shadow_atlas_desc(size, views)).map(Arc::new)
+}
+
+/// The shadow maps' image ([`shadow_atlas`]; the static casters' cache is one like it).
+fn shadow_atlas_desc(size: u32, views: u32) -> ImageDesc {
     let (size, layers) = if views > 0 { (size, views) } else { (1, 1) };
     let usage = vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
         | vk::ImageUsageFlags::SAMPLED
         | vk::ImageUsageFlags::TRANSFER_SRC
         | vk::ImageUsageFlags::TRANSFER_DST;
-    let name = if views > 0 { "shadow maps" } else { "shadow map placeholder" };
-    let desc = ImageDesc { concurrent: true, ..ImageDesc::d2_array(SHADOW_FORMAT, size, size, layers, usage) };
-    Image::new(ctx, name, desc).map(Arc::new)
+    ImageDesc { concurrent: true, ..ImageDesc::d2_array(SHADOW_FORMAT, size, size, layers, usage) }
 }
 
 /// The indirect light the lighting pass composes: the traced cones (and rays), else the RSM

@@ -7,15 +7,20 @@
 //! Everything here is host-side bookkeeping of what the GPU images hold, tested without a GPU.
 
 use crate::render::lights::GpuShadowView;
+use std::sync::{Arc, Mutex};
+
+/// Per view: the view the cache of the static casters holds, if it holds one (only with
+/// moving casters, and only for views that stood still while the casters moved). One cache
+/// serves every copy of the frame's maps (`async-pipelined`): the copies share this.
+pub type CacheHeld = Arc<Mutex<Vec<Option<GpuShadowView>>>>;
 
 /// What the shadow maps and the static casters' cache were drawn from, view by view.
 #[derive(Debug, Default)]
 pub struct ShadowCache {
     /// Per view: the view (matrix and parameters) the maps hold; `None` before the first draw.
     maps: Vec<Option<GpuShadowView>>,
-    /// Per view: the view the cache of the static casters holds, if it holds one (only with
-    /// moving casters, and only for views that stood still while the casters moved).
-    cache: Vec<Option<GpuShadowView>>,
+    /// What the static casters' cache holds, shared by every copy of the maps.
+    cache: CacheHeld,
     /// The instance rows of the static and of the moving casters the maps were drawn with;
     /// `None` before the first draw.
     instances: Option<(Vec<u8>, Vec<u8>)>,
@@ -48,12 +53,13 @@ impl ShadowCache {
     pub fn plan(&mut self, views: &[GpuShadowView], statics: &[u8], moving: &[u8]) -> ShadowDraws {
         let n = views.len();
         self.maps.resize(n, None);
-        self.cache.resize(n, None);
+        let mut cache = self.cache.lock().unwrap_or_else(|p| p.into_inner());
+        cache.resize(n, None);
         let held = self.instances.replace((statics.to_vec(), moving.to_vec()));
         let edited = held.as_ref().is_some_and(|h| h.0 != statics);
         let moved = held.as_ref().is_some_and(|h| h.1 != moving);
         if edited {
-            self.cache.iter_mut().for_each(|c| *c = None);
+            cache.iter_mut().for_each(|c| *c = None);
         }
         let mut draws = ShadowDraws::default();
         for (i, view) in views.iter().enumerate() {
@@ -61,14 +67,27 @@ impl ShadowCache {
                 draws.all.push(i as u32);
                 self.maps[i] = Some(*view);
             } else if moved {
-                if !same(&self.cache[i], view) {
+                if !same(&cache[i], view) {
                     draws.statics.push(i as u32);
-                    self.cache[i] = Some(*view);
+                    cache[i] = Some(*view);
                 }
                 draws.moving.push(i as u32);
             }
         }
         draws
+    }
+}
+
+impl ShadowCache {
+    /// Bookkeeping for one copy of the maps whose static casters' cache is `cache`'s.
+    pub fn sharing(cache: &CacheHeld) -> ShadowCache {
+        ShadowCache { cache: cache.clone(), ..ShadowCache::default() }
+    }
+
+    /// Forget what the maps and the cache hold: the next plan draws every view.
+    pub fn forget(&mut self) {
+        self.cache.lock().unwrap_or_else(|p| p.into_inner()).clear();
+        *self = ShadowCache::sharing(&self.cache);
     }
 }
 
@@ -138,6 +157,30 @@ mod tests {
         let still = [view(1.0), view(12.0)];
         assert_eq!(c.plan(&still, &[1, 9], &[4, 2]), draws(&[0, 1], &[], &[]));
         assert_eq!(c.plan(&still, &[1, 9], &[4, 3]), draws(&[], &[0, 1], &[0, 1]));
+    }
+
+    /// async-pipelined: two copies of the maps, used in turn, share one static casters' cache.
+    /// A view that comes to stand still has its static casters drawn once, by whichever copy
+    /// sees it first; the other copy, whose maps last held another view, draws it from scratch.
+    #[test]
+    fn copies_of_the_maps_share_the_static_casters_cache() {
+        let (mut a, cache) = (ShadowCache::default(), CacheHeld::default());
+        a = ShadowCache { cache: cache.clone(), ..a };
+        let mut b = ShadowCache::sharing(&cache);
+        let (v1, v2) = ([view(1.0)], [view(2.0)]);
+        assert_eq!(a.plan(&v1, &[1], &[3]), draws(&[0], &[], &[]));
+        assert_eq!(b.plan(&v2, &[1], &[4]), draws(&[0], &[], &[]));
+        // v2 stands still from here on while the casters move.
+        assert_eq!(a.plan(&v2, &[1], &[5]), draws(&[0], &[], &[]), "a's maps hold v1");
+        assert_eq!(b.plan(&v2, &[1], &[6]), draws(&[], &[0], &[0]), "b caches v2's static casters");
+        assert_eq!(a.plan(&v2, &[1], &[7]), draws(&[], &[], &[0]), "a copies the cache b drew");
+        assert_eq!(b.plan(&v2, &[1], &[8]), draws(&[], &[], &[0]));
+        // Forgetting (a redraw) empties the shared cache too.
+        a.forget();
+        b.forget();
+        assert_eq!(a.plan(&v2, &[1], &[9]), draws(&[0], &[], &[]));
+        assert_eq!(b.plan(&v2, &[1], &[10]), draws(&[0], &[], &[]));
+        assert_eq!(a.plan(&v2, &[1], &[11]), draws(&[], &[0], &[0]));
     }
 
     #[test]

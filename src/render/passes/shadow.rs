@@ -11,6 +11,7 @@
 use crate::gpu::{shaders, Access, Context, GpuResult, GraphicsDesc, Image, Pipeline};
 use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, Use};
+use crate::render::reuse::ShadowCache;
 use crate::render::scene_gpu::{Draw, SceneGpu};
 use crate::render::FrameBuffers;
 use ash::vk;
@@ -275,38 +276,58 @@ pub struct ShadowMaps {
     /// Every caster, into the views that changed.
     pub all: ShadowPass,
     pub cached: Option<CachedCasters>,
-    held: RefCell<crate::render::reuse::ShadowCache>,
+    held: RefCell<ShadowCache>,
     /// Per draw (a row of the instance table): the caster moves.
     moving_rows: Vec<bool>,
 }
 
+/// The static casters' maps, one cache for every copy of the frame's maps (`frame::Carried`):
+/// drawn and copied on the graphics queue only, so sharing it ties no copy to the compute
+/// work of another, and a view that comes to stand still is cached once, as in `sync`.
+pub struct StaticCasterCache {
+    pub image: Arc<Image>,
+    pub held: crate::render::reuse::CacheHeld,
+}
+
+impl StaticCasterCache {
+    /// Where some caster moves: a cache like the shadow maps `desc` describes.
+    pub fn new(ctx: &Arc<Context>, scene: &SceneGpu, desc: crate::gpu::ImageDesc) -> GpuResult<Option<Self>> {
+        if !scene.draws.iter().any(|d| d.moving) {
+            return Ok(None);
+        }
+        let image = Arc::new(Image::new(ctx, "shadow maps (static casters)", desc)?);
+        Ok(Some(StaticCasterCache { image, held: Default::default() }))
+    }
+}
+
 impl ShadowMaps {
-    /// The passes that draw the `views` layers of `maps`; where casters move, the cache of the
-    /// static ones (an image like `maps`) and its passes too.
+    /// The passes that draw the `views` layers of `maps`; where casters move, those that draw
+    /// the static ones into `cache` and copy it into the maps.
     pub fn new(
         ctx: &Arc<Context>,
-        scene: &Arc<SceneGpu>,
-        frame: &FrameBuffers,
+        (scene, frame): (&Arc<SceneGpu>, &FrameBuffers),
         maps: &Arc<Image>,
         views: u32,
+        cache: Option<&StaticCasterCache>,
     ) -> GpuResult<ShadowMaps> {
-        let cached = if scene.draws.iter().any(|d| d.moving) {
-            let cache = Arc::new(Image::new(ctx, "shadow maps (static casters)", maps.desc)?);
-            let c = CachedCasters {
-                statics: ShadowPass::new(ctx, scene, frame, &cache, views, Casters::Static)?,
-                copy: ShadowCopyPass::new(&cache, maps, views),
-                moving: ShadowPass::new(ctx, scene, frame, maps, views, Casters::Moving)?,
-                cache,
-            };
-            // The first frame draws every view from scratch.
-            c.set_views(&[], &[]);
-            Some(c)
-        } else {
-            None
+        let cached = match cache {
+            Some(c) => {
+                let c = CachedCasters {
+                    statics: ShadowPass::new(ctx, scene, frame, &c.image, views, Casters::Static)?,
+                    copy: ShadowCopyPass::new(&c.image, maps, views),
+                    moving: ShadowPass::new(ctx, scene, frame, maps, views, Casters::Moving)?,
+                    cache: c.image.clone(),
+                };
+                // The first frame draws every view from scratch.
+                c.set_views(&[], &[]);
+                Some(c)
+            }
+            None => None,
         };
         let all = ShadowPass::new(ctx, scene, frame, maps, views, Casters::All)?;
         let moving_rows = scene.draws.iter().map(|d| d.moving).collect();
-        Ok(ShadowMaps { all, cached, held: RefCell::default(), moving_rows })
+        let held = RefCell::new(cache.map(|c| ShadowCache::sharing(&c.held)).unwrap_or_default());
+        Ok(ShadowMaps { all, cached, held, moving_rows })
     }
 
     /// Plan the next frame's draws for its `views` and `instances` (the instance table).
@@ -326,7 +347,7 @@ impl ShadowMaps {
 
     /// Forget what the maps and the cache hold: the next plan draws every view.
     pub fn forget(&self) {
-        *self.held.borrow_mut() = Default::default();
+        self.held.borrow_mut().forget();
     }
 
     /// After a frame is recorded: the next one draws what its plan says, else nothing.
