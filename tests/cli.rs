@@ -487,7 +487,7 @@ fn every_schedule_is_clean_under_queue_submit_synchronization_validation() {
         "VALIDATION_CHECK_ENABLE_SYNCHRONIZATION_VALIDATION,VALIDATION_CHECK_ENABLE_SYNCHRONIZATION_VALIDATION_QUEUE_SUBMIT",
     )];
     let dir = tempfile::tempdir().unwrap();
-    for mode in ["sync", "async", "async-lagged"] {
+    for mode in ["sync", "async", "async-lagged", "async-pipelined"] {
         let png = dir.path().join(format!("{mode}.png"));
         let o = dvsgi_with(
             &[

@@ -608,6 +608,24 @@ pub struct FrameTargets {
 }
 
 impl FrameTargets {
+    /// The targets of a frame whose passes write them.
+    fn of(
+        (gbuffer, atlas): (&Arc<GBuffer>, &Arc<Image>),
+        (radiance, display, resolve): (&Arc<Image>, &Arc<Image>, Option<&ResolvePass>),
+        shadow: Option<&ShadowMaps>,
+        rt_shadow: Option<&RtShadowPass>,
+    ) -> FrameTargets {
+        FrameTargets {
+            gbuffer: gbuffer.clone(),
+            shadow_atlas: atlas.clone(),
+            radiance: radiance.clone(),
+            display: display.clone(),
+            resolved: resolve.map(|r| r.resolved.clone()),
+            shadow_cache: shadow.and_then(|s| s.cached.as_ref()).map(|c| c.cache.clone()),
+            rt_visibility: rt_shadow.map(|r| r.visibility.clone()),
+        }
+    }
+
     /// Every target that exists: the G-buffer, the shadow atlas, radiance and display, the
     /// shadow cache, the resolved radiance and the rays' visibility.
     pub fn all(&self) -> Vec<&Arc<Image>> {
@@ -703,15 +721,8 @@ impl FramePasses {
         let cache = carried.static_casters.as_ref();
         let shadow = (views > 0).then(|| ShadowMaps::new(ctx, (scene_gpu, frame), &atlas, views, cache)).transpose()?;
         let exposure = ExposurePasses::new(ctx, frame, &shown, &carried.exposure)?;
-        let targets = FrameTargets {
-            gbuffer: gbuffer.clone(),
-            shadow_atlas: atlas.clone(),
-            radiance: radiance.clone(),
-            display: display.clone(),
-            resolved: resolve.as_ref().map(|r| r.resolved.clone()),
-            shadow_cache: shadow.as_ref().and_then(|s| s.cached.as_ref()).map(|c| c.cache.clone()),
-            rt_visibility: rt_shadow.as_ref().map(|r| r.visibility.clone()),
-        };
+        let images = (&radiance, &display, resolve.as_ref());
+        let targets = FrameTargets::of((&gbuffer, &atlas), images, shadow.as_ref(), rt_shadow.as_ref());
         Ok(FramePasses {
             upload: frame_upload(frame, scene_gpu, rays.as_ref()),
             voxels,
