@@ -147,7 +147,7 @@ fn pipelined_graphics_never_waits_for_the_previous_frames_cone_trace() {
             assert!(on(QueueKind::Graphics, "gbuffer").is_some(), "{file}: {:?}", pair[0]);
             for g in pair[1].iter().filter(|s| s.queue == QueueKind::Graphics) {
                 assert!(
-                    g.wait.is_none_or(|w| w < trace),
+                    g.wait.map_or(true, |w| w < trace),
                     "{file}: frame {} graphics {:?} waits for compute {:?}, frame {n}'s cone trace is {trace}: {:?}",
                     n + 1,
                     g.passes,

@@ -771,7 +771,7 @@ impl FramePasses {
     pub fn own_images(&self) -> Vec<&Arc<Image>> {
         let shared = self.targets.shadow_cache.as_ref();
         let mut out: Vec<&Arc<Image>> =
-            self.targets.all().into_iter().filter(|i| shared.is_none_or(|s| !Arc::ptr_eq(i, s))).collect();
+            self.targets.all().into_iter().filter(|i| !shared.is_some_and(|s| Arc::ptr_eq(i, s))).collect();
         if let Some(c) = &self.cones {
             out.extend(c.low.all());
             out.extend(c.upsample.iter().flat_map(|u| u.targets.all()));

@@ -528,7 +528,7 @@ mod tests {
         assert_eq!(t.wait, Some(4));
         assert!(t.releases.is_empty(), "{:?}", t.releases);
         let b = t.barriers.first().map(|b| b.1);
-        assert!(b.is_none_or(|b| b.src_family == vk::QUEUE_FAMILY_IGNORED), "{b:?}");
+        assert!(b.map_or(true, |b| b.src_family == vk::QUEUE_FAMILY_IGNORED), "{b:?}");
         let t = use_(&mut tr, vol, &[FragmentShaderWrite], false, G, 5);
         assert_eq!(t.wait, Some(9), "the write waits for the read on compute (write after read)");
         assert!(t.releases.is_empty(), "{:?}", t.releases);

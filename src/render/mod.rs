@@ -252,6 +252,11 @@ impl Renderer {
     /// `async-pipelined`, else one (copies made before stay: a mode switch keeps them).
     fn make_copies(&mut self, plan: FramePlan) -> GpuResult<()> {
         let want = if self.scheduler.mode().per_frame_copies() { self.frames_in_flight as usize } else { 1 };
+        if !self.copies.is_empty() && self.copies.len() < want {
+            // A switch to async-pipelined: refuse copies that cannot fit, before allocating.
+            let estimate = budget::Estimate::on_plan(&self.ctx, &self.scene, &plan);
+            estimate.with_copies(want as u32).check(&self.ctx, &self.scene)?;
+        }
         while self.copies.len() < want {
             let frame = FrameBuffers::new(&self.ctx, &self.scene, lights::shadow_view_count(&self.scene))?;
             let passes = FramePasses::new(&self.ctx, (&self.scene, &plan), &self.scene_gpu, &frame, &self.carried)?;
