@@ -857,6 +857,14 @@ impl FramePasses {
     /// while it would otherwise wait for the previous frame's voxel light (whose reads of the
     /// voxels the revoxelization must follow).
     pub fn list(&self, state: FrameState) -> Vec<&dyn Pass> {
+        self.list_split(state).0
+    }
+
+    /// [`FramePasses::list`], and with `state.raster_first` where the voxel updates end: the
+    /// scheduler ends their submit there, so that the next frame's revoxelization, which waits
+    /// for them, does not also wait for this frame's cone trace where both would otherwise
+    /// share a submit (one queue family, no transfer to split them).
+    pub fn list_split(&self, state: FrameState) -> (Vec<&dyn Pass>, Option<usize>) {
         let voxelization = self.voxelization(state);
         let mut maps: Vec<&dyn Pass> = Vec::new();
         if let (true, Some(shadow)) = (self.samples_shadow_maps(state), &self.shadow) {
@@ -880,11 +888,12 @@ impl FramePasses {
         if !lagged {
             passes.append(&mut voxel_lighting);
         }
+        let split = state.raster_first.then_some(passes.len());
         passes.append(&mut raster);
         passes.extend(shading);
         self.push_tail(state, &mut passes);
         passes.append(&mut voxel_lighting);
-        passes
+        (passes, split)
     }
 
     /// Voxelizing the static geometry (the first frame) and the dynamic objects (when the

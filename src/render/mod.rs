@@ -597,10 +597,15 @@ impl Renderer {
         if state.relight {
             self.voxel_updates += 1;
         }
-        let mut list = self.copies[self.copy].list(state);
+        let (mut list, split) = self.copies[self.copy].list_split(state);
         list.extend_from_slice(extra);
         self.last_passes = list.iter().map(|p| p.name().to_string()).collect();
-        self.scheduler.record(&list)?;
+        let (head, rest) = list.split_at(split.unwrap_or(0));
+        self.scheduler.record(head)?;
+        if split.is_some() {
+            self.scheduler.end_batch(graph::QueueKind::Compute)?;
+        }
+        self.scheduler.record(rest)?;
         drop(list);
         if let Some(shadow) = &self.passes().shadow {
             shadow.recorded();

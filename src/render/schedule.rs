@@ -582,6 +582,12 @@ impl Scheduler {
         Ok(())
     }
 
+    /// Submit the open batch of `q`, if any: what is recorded next starts a new one (where a
+    /// later frame waits for what came before, not for what follows).
+    pub fn end_batch(&mut self, q: QueueKind) -> GpuResult<()> {
+        self.close(q)
+    }
+
     /// Submit every open batch.
     fn flush(&mut self) -> GpuResult<()> {
         for q in QueueKind::ALL {
