@@ -73,7 +73,7 @@ fn a_capture_is_what_render_makes_of_the_scene_file_it_writes() {
     let window = image::open(dir.path().join("shot-window.png")).unwrap().to_rgb8();
     assert_eq!(window.dimensions(), (640, 400), "the window as shown");
     let (scene, schedule, frames) = reproduce_line(&out);
-    assert_eq!((schedule.as_str(), frames.as_str()), ("async-lagged", "4"), "{out}");
+    assert_eq!((schedule.as_str(), frames.as_str()), ("async-lagged", "7"), "{out}");
     let again = dir.path().join("again.exr");
     let args = ["render", &scene, "--schedule", &schedule, "--frames", &frames, "--out", again.to_str().unwrap()];
     let r = Command::new(env!("CARGO_BIN_EXE_dvsgi"))
