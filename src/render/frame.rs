@@ -759,8 +759,21 @@ impl FramePasses {
         if let Some(v) = &self.voxels {
             out.extend(v.volumes.all());
         }
-        let targets = self.targets.all().len() - usize::from(self.targets.shadow_cache.is_some());
-        out.extend(self.own_images().into_iter().skip(targets));
+        out.extend(self.gi_targets());
+        out
+    }
+
+    /// The cone tracer's targets (at 1/k and full resolution), or the RSM's maps, targets
+    /// and propagation volume.
+    fn gi_targets(&self) -> Vec<&Arc<Image>> {
+        let mut out = Vec::new();
+        if let Some(c) = &self.cones {
+            out.extend(c.low.all());
+            out.extend(c.upsample.iter().flat_map(|u| u.targets.all()));
+        }
+        if let Some(r) = &self.rsm {
+            out.extend(r.images());
+        }
         out
     }
 
@@ -772,13 +785,7 @@ impl FramePasses {
         let shared = self.targets.shadow_cache.as_ref();
         let mut out: Vec<&Arc<Image>> =
             self.targets.all().into_iter().filter(|i| !shared.is_some_and(|s| Arc::ptr_eq(i, s))).collect();
-        if let Some(c) = &self.cones {
-            out.extend(c.low.all());
-            out.extend(c.upsample.iter().flat_map(|u| u.targets.all()));
-        }
-        if let Some(r) = &self.rsm {
-            out.extend(r.images());
-        }
+        out.extend(self.gi_targets());
         out
     }
 
