@@ -86,7 +86,7 @@ void count_or_allocate() {
         ivec3 b = map_entry(first + k);
         if (s < blist.capacity[POOL]) {
             blist.entries[blist.first[POOL] + s] = pack_brick(b);
-            brick_map_store(POOL, b, s + 1u);
+            brick_map_store(POOL, b, slot_entry(POOL, s));
         } else {
             atomicAdd(blist.dropped[POOL], 1u);
             brick_map_store(POOL, b, 0u);
@@ -97,7 +97,7 @@ void count_or_allocate() {
 
 void release(ivec3 b) {
     uint e = brick_map_load(POOL, b);
-    if (e != 0u && e != BRICK_PENDING && e - 1u >= blist.static_count[POOL]) brick_map_store(POOL, b, 0u);
+    if (e != 0u && e != BRICK_PENDING && entry_slot(POOL, e) >= blist.static_count[POOL]) brick_map_store(POOL, b, 0u);
 }
 
 void main() {

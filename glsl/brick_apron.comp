@@ -24,9 +24,9 @@ void main() {
     uint i = brick_dispatch_index(POOL);
     if (i == ~0u) return;
     ivec3 b = unpack_brick(blist.entries[blist.first[POOL] + i]);
-    uint s = brick_slot(POOL, b);
-    if (s == 0u) return;
-    ivec3 origin = slot_texel(POOL, s - 1u, 9);
+    uint e = brick_entry(POOL, b);
+    if (e == 0u) return;
+    ivec3 origin = entry_texel(e, 9);
     // 8 workgroups of 64 share the brick's 9^3 texels.
     for (uint k = (gl_WorkGroupID.y % 8u) * 64u + gl_LocalInvocationID.x; k < 729u; k += 512u) {
         ivec3 local = ivec3(k % 9u, (k / 9u) % 9u, k / 81u);

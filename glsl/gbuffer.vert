@@ -14,6 +14,9 @@ layout(location = 0) out vec3 v_world;
 layout(location = 1) out vec3 v_normal;
 layout(location = 2) out vec2 v_uv;
 layout(location = 3) flat out uint v_material;
+// The depth prepass and the G-buffer over it (render.depth_prepass) are different pipelines of
+// this shader: their depths must be equal bit for bit.
+invariant gl_Position;
 
 void main() {
     Instance inst = instances[gl_InstanceIndex];

@@ -23,5 +23,5 @@ void main() {
     }
     float scale = frame.shadow.w * (frame.exposure.x > 0.5 ? exp2(auto_exposure.x) : 1.0);
     vec3 mapped = tonemap(c * scale, frame.counts.w);
-    imageStore(out_display, px, vec4(linear_to_srgb(mapped), 1.0));
+    imageStore(out_display, px, vec4(unorm8_code(linear_to_srgb(mapped)), 1.0));
 }

@@ -61,8 +61,8 @@ void brick_pass() {
     // Dense: the brick's voxels are texels of the volume; bricked: of its slot, if resident.
     ivec3 origin = b * 8;
     if (bricked()) {
-        uint s = brick_slot(0, b);
-        origin = s == 0u ? ivec3(-1) : slot_texel(0, s - 1u, 8);
+        uint e = brick_entry(0, b);
+        origin = e == 0u ? ivec3(-1) : entry_texel(e, 8);
     }
     // Each invocation a row of 8 voxels along x.
     ivec3 row = ivec3(0, int(gl_LocalInvocationIndex & 7u), int(gl_LocalInvocationIndex >> 3));

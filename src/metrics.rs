@@ -273,6 +273,20 @@ pub fn display_srgb8(img: &LinearImage, exposure: f32, tonemap_mode: ToneMap) ->
     out
 }
 
+/// [`display_srgb8`] before its rounding: each value times 255 (magenta for non-finite pixels).
+pub fn display_unrounded(img: &LinearImage, exposure: f32, tonemap_mode: ToneMap) -> Vec<f32> {
+    let scale = exposure.exp2();
+    let mut out = Vec::with_capacity(img.rgb.len());
+    for px in img.rgb.chunks_exact(3) {
+        if px.iter().any(|v| !v.is_finite()) {
+            out.extend_from_slice(&[255.0, 0.0, 255.0]);
+            continue;
+        }
+        out.extend(px.iter().map(|&v| linear_to_srgb(tonemap(v * scale, tonemap_mode)) * 255.0));
+    }
+    out
+}
+
 /// Distribution summary of a per-pixel metric map.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Summary {

@@ -963,12 +963,9 @@ fn every_radiance_apron_holds_the_texels_of_the_bricks_below() {
         let (mut checked, mut nonzero) = (0, 0);
         for (i, &entry) in map.iter().enumerate().filter(|(_, &e)| e != 0) {
             let b = [i as i64 % m, (i as i64 / m) % m, i as i64 / (m * m)];
-            let s = entry as i64 - 1;
-            let slot = [
-                s % pool.slots[0] as i64,
-                (s / pool.slots[0] as i64) % pool.slots[1] as i64,
-                s / (pool.slots[0] * pool.slots[1]) as i64,
-            ];
+            let slot =
+                dvsgi::render::voxel::bricks::Pool::entry_slot(entry).expect("a resident brick's entry").map(i64::from);
+            assert!((0..3).all(|k| slot[k] < pool.slots[k] as i64), "brick {b:?}: slot {slot:?} outside the pool");
             for (z, y, x) in (0..9).flat_map(|z| (0..9).flat_map(move |y| (0..9).map(move |x| (z, y, x)))) {
                 if x != 0 && y != 0 && z != 0 {
                     continue; // the interior

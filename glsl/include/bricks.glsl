@@ -1,8 +1,8 @@
 // The bricked layout of the voxel volumes (render::bricks, docs/SPARSE.md). A volume stores
 // only resident bricks of 8^3 texels, side by side in a pool image; a map per pool (R32_UINT,
-// one texel per brick of the grid) holds 0 for a brick that is not resident, else its pool
-// slot + 1. Pool 0 holds the full-resolution volumes; pools 1.. the directional levels larger
-// than 64^3. Every volume that is sampled with hardware trilinear filtering (pool 0's radiance
+// one texel per brick of the grid) holds 0 for a brick that is not resident, else where its
+// slot lies in the pool (brick_entry below). Pool 0 holds the full-resolution volumes; pools
+// 1.. the directional levels larger than 64^3. Every volume that is sampled with hardware trilinear filtering (pool 0's radiance
 // volumes, every directional level) stores each brick with a one-texel apron on its low side
 // (9^3: texels 8b-1 .. 8b+7 of brick b per axis), so a filter stays inside one brick; a brick
 // is resident when any of its 9^3 texels can be non-empty. Pool 0's integer volumes (albedo,
@@ -63,16 +63,37 @@ void brick_map_store(int p, ivec3 b, uint v) {
 }
 #endif
 
-// Pool slot + 1 of brick b of pool p; 0 when it is not resident.
-uint brick_slot(int p, ivec3 b) {
-    uint s = brick_map_load(p, b);
-    return s == BRICK_PENDING ? 0u : s;
+// A resident brick's map entry is where its slot lies in the pool image, in slots (10 bits
+// per axis), with BRICK_RESIDENT set: a lookup finds the brick's texels with shifts and masks,
+// not three divisions by the pool's sides per sample. 0: not resident.
+const uint BRICK_RESIDENT = 1u << 30;
+
+// The map entry of slot s (0-based, the allocation order) of pool p.
+uint slot_entry(int p, uint s) {
+    uvec4 q = grid.pools[p];
+    return (s % q.x) | (((s / q.x) % q.y) << 10) | ((s / (q.x * q.y)) << 20) | BRICK_RESIDENT;
+}
+
+// The slot (0-based) of resident map entry e of pool p.
+uint entry_slot(int p, uint e) {
+    uvec4 q = grid.pools[p];
+    return (e & 0x3ffu) + q.x * (((e >> 10) & 0x3ffu) + q.y * ((e >> 20) & 0x3ffu));
+}
+
+// Texel origin of resident map entry e's slot in an image of `stride`^3 texels per slot.
+ivec3 entry_texel(uint e, int stride) {
+    return ivec3(e & 0x3ffu, (e >> 10) & 0x3ffu, (e >> 20) & 0x3ffu) * stride;
+}
+
+// The map entry of brick b of pool p when it is resident; 0 when it is not.
+uint brick_entry(int p, ivec3 b) {
+    uint e = brick_map_load(p, b);
+    return e == BRICK_PENDING ? 0u : e;
 }
 
 // Texel origin of slot s (0-based) in pool p's image.
 ivec3 slot_texel(int p, uint s, int stride) {
-    uvec4 q = grid.pools[p];
-    return ivec3(s % q.x, (s / q.x) % q.y, s / (q.x * q.y)) * stride;
+    return entry_texel(slot_entry(p, s), stride);
 }
 
 // The pool texel of full-resolution voxel c in an integer volume (8^3 per slot); (-1) where c
@@ -80,8 +101,8 @@ ivec3 slot_texel(int p, uint s, int stride) {
 ivec3 full_texel(ivec3 c) {
     if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(int(grid.dims.x))))) return ivec3(-1);
     if (!bricked()) return c;
-    uint s = brick_slot(0, c >> 3);
-    return s == 0u ? ivec3(-1) : slot_texel(0, s - 1u, 8) + (c & 7);
+    uint e = brick_entry(0, c >> 3);
+    return e == 0u ? ivec3(-1) : entry_texel(e, 8) + (c & 7);
 }
 
 // The pool texel of full-resolution voxel c in a radiance volume (9^3 per slot, the apron
@@ -89,8 +110,8 @@ ivec3 full_texel(ivec3 c) {
 ivec3 radiance_texel(ivec3 c) {
     if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(int(grid.dims.x))))) return ivec3(-1);
     if (!bricked()) return c;
-    uint s = brick_slot(0, c >> 3);
-    return s == 0u ? ivec3(-1) : slot_texel(0, s - 1u, 9) + (c & 7) + 1;
+    uint e = brick_entry(0, c >> 3);
+    return e == 0u ? ivec3(-1) : entry_texel(e, 9) + (c & 7) + 1;
 }
 
 // Store radiance v of full-resolution voxel c (inside the grid) in radiance volume `img`: its
@@ -109,8 +130,8 @@ ivec3 radiance_texel(ivec3 c) {
                 for (int y_ = lo_.y; y_ <= hi_.y; ++y_) {                                        \
                     for (int x_ = lo_.x; x_ <= hi_.x; ++x_) {                                    \
                         ivec3 b_ = ivec3(x_, y_, z_);                                            \
-                        uint s_ = brick_slot(0, b_);                                             \
-                        if (s_ != 0u) imageStore(img, slot_texel(0, s_ - 1u, 9) + c_ - b_ * 8 + 1, v_); \
+                        uint e_ = brick_entry(0, b_);                                            \
+                        if (e_ != 0u) imageStore(img, entry_texel(e_, 9) + c_ - b_ * 8 + 1, v_); \
                     }                                                                            \
                 }                                                                                \
             }                                                                                    \
@@ -121,8 +142,8 @@ ivec3 radiance_texel(ivec3 c) {
 // (-1) outside the level or where the brick is not resident.
 ivec3 level_texel(int p, ivec3 t) {
     if (any(lessThan(t, ivec3(0))) || any(greaterThanEqual(t, ivec3(pool_level_side(p))))) return ivec3(-1);
-    uint s = brick_slot(p, t >> 3);
-    return s == 0u ? ivec3(-1) : slot_texel(p, s - 1u, 9) + (t & 7) + 1;
+    uint e = brick_entry(p, t >> 3);
+    return e == 0u ? ivec3(-1) : entry_texel(e, 9) + (t & 7) + 1;
 }
 
 // Pool coordinates (texels, continuous) of position `pos` (texels of the pool's level: the
@@ -132,9 +153,9 @@ ivec3 level_texel(int p, ivec3 t) {
 vec4 level_lookup(int pool, vec3 pos) {
     ivec3 t0 = ivec3(floor(pos - 0.5));
     ivec3 b = (t0 + 1) >> 3;
-    uint s = brick_slot(pool, b);
-    if (s == 0u) return vec4(0.0);
-    return vec4(vec3(slot_texel(pool, s - 1u, 9)) + pos - vec3(b * 8) + 1.0, 1.0);
+    uint e = brick_entry(pool, b);
+    if (e == 0u) return vec4(0.0);
+    return vec4(vec3(entry_texel(e, 9)) + pos - vec3(b * 8) + 1.0, 1.0);
 }
 
 #endif

@@ -28,4 +28,12 @@ vec3 linear_to_srgb(vec3 c) {
     return mix(hi, lo, lessThanEqual(c, vec3(0.0031308)));
 }
 
+// The 8-bit code of each encoded channel, as a UNORM value: round(c * 255) / 255, an exact
+// code. An 8-bit UNORM store may convert the float to 16 bits first and round either way
+// (Vulkan allows either neighbouring code); an exact code survives both, so the stored bytes
+// are the host's (metrics::display_srgb8) on every device.
+vec3 unorm8_code(vec3 c) {
+    return floor(clamp(c, 0.0, 1.0) * 255.0 + 0.5) / 255.0;
+}
+
 #endif

@@ -568,6 +568,9 @@ pub struct FramePasses {
     /// The direct light samples the shadow maps (every frame); else only voxel lighting does.
     pub direct_shadow_maps: bool,
     pub gbuffer: GBufferPass,
+    /// `render.depth_prepass` (resolved for the device): the opaque draws' depth, which the
+    /// G-buffer is drawn over.
+    pub depth_prepass: Option<GBufferPass>,
     /// Only where rays are traced (`gi.specular` or `gi.shadows` = "rt").
     pub rays: Option<RayPasses>,
     /// Only with `gi.shadows = "rt"`: the direct light's shadow rays.
@@ -723,12 +726,15 @@ impl FramePasses {
         let exposure = ExposurePasses::new(ctx, frame, &shown, &carried.exposure)?;
         let images = (&radiance, &display, resolve.as_ref());
         let targets = FrameTargets::of((&gbuffer, &atlas), images, shadow.as_ref(), rt_shadow.as_ref());
+        let prepass = plan.lit && s.depth_prepass.resolve(ctx.info.is_cpu());
+        let (gbuffer, depth_prepass) = GBufferPass::for_frame(ctx, scene_gpu, frame, &gbuffer, prepass)?;
         Ok(FramePasses {
             upload: frame_upload(frame, scene_gpu, rays.as_ref()),
             voxels,
             shadow,
             direct_shadow_maps: plan.direct_shadow_maps,
-            gbuffer: GBufferPass::new(ctx, scene_gpu, frame, &gbuffer)?,
+            gbuffer,
+            depth_prepass,
             targets,
             rays,
             rt_shadow,
@@ -938,6 +944,9 @@ impl FramePasses {
         let mut raster: Vec<&dyn Pass> = Vec::new();
         if let Some(build) = self.top_level_build() {
             raster.push(build);
+        }
+        if let Some(p) = &self.depth_prepass {
+            raster.push(p);
         }
         raster.push(&self.gbuffer);
         let mut shading: Vec<&dyn Pass> = Vec::new();

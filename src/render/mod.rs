@@ -418,7 +418,8 @@ impl Renderer {
         use passes::gbuffer::GBufferVariant;
         use raster_profile::{Counted, RasterPassSamples, StatisticsPool};
         let ctx = self.ctx.clone();
-        let full = &self.copies[0].gbuffer;
+        let frame_pass = &self.copies[0].gbuffer;
+        let full = &frame_pass.with_variant(&ctx, GBufferVariant::Full)?;
         let prepass = full.with_variant(&ctx, GBufferVariant::DepthPrepass)?;
         let over = full.with_variant(&ctx, GBufferVariant::OverPrepass)?;
         let pool = if ctx.info.optional.pipeline_statistics_query { Some(StatisticsPool::new(&ctx, 2)?) } else { None };

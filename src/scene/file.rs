@@ -106,6 +106,7 @@ pub(crate) struct RenderDef {
     pub view_lod: f32,
     pub view_direction: ViewDirection,
     pub supersample: u32,
+    pub depth_prepass: DepthPrepass,
 }
 
 /// `render.exposure`: EV stops, or "auto" (each display image's own key:
@@ -173,6 +174,7 @@ impl Default for RenderDef {
             view_lod: d.view_lod,
             view_direction: d.view_direction,
             supersample: d.supersample,
+            depth_prepass: d.depth_prepass,
         }
     }
 }
@@ -425,6 +427,7 @@ pub(crate) const RENDER_KEYS: &[&str] = &[
     "view_lod",
     "view_direction",
     "supersample",
+    "depth_prepass",
 ];
 pub(crate) const MATERIAL_KEYS: &[&str] = &[
     "name",
@@ -1060,6 +1063,7 @@ fn build_render_settings(ctx: &Ctx, r: &RenderDef, gi: GiDef, camera: &Camera) -
         view_lod: ctx.scalar("render.view_lod", r.view_lod)?,
         view_direction: r.view_direction,
         supersample: r.supersample,
+        depth_prepass: r.depth_prepass,
         gi: build_gi_settings(ctx, gi)?,
     };
     check_render_ranges(ctx, &settings)?;

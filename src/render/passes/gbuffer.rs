@@ -73,8 +73,11 @@ impl GBuffer {
     }
 }
 
-/// What a G-buffer pass draws. The frame runs `Full`; `bench --raster-profile` also runs a
-/// depth prepass and the G-buffer over it, to split the pass's time (`render::raster_profile`).
+/// What a G-buffer pass draws. The frame runs `Full`, or `DepthPrepass` then `OverPrepass`
+/// (`render.depth_prepass`); `bench --raster-profile` runs all three, to split the pass's time
+/// (`render::raster_profile`). Both ways give the same targets: each pixel holds the last drawn
+/// of its nearest fragments (depth test LESS_OR_EQUAL), the masked draws after the opaque ones
+/// in both, and every pipeline computes the position alike (`invariant gl_Position`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum GBufferVariant {
     /// Every draw into every target, depth tested and written.
@@ -133,14 +136,19 @@ fn pipeline(
 }
 
 impl GBufferPass {
-    /// The frame's G-buffer pass.
-    pub fn new(
+    /// The frame's G-buffer pass, and with `prepass` the depth prepass it is drawn over.
+    pub fn for_frame(
         ctx: &Arc<Context>,
         scene: &Arc<SceneGpu>,
         frame: &FrameBuffers,
         gbuffer: &Arc<GBuffer>,
-    ) -> GpuResult<Self> {
-        GBufferPass::variant(ctx, scene, frame, gbuffer, GBufferVariant::Full)
+        prepass: bool,
+    ) -> GpuResult<(GBufferPass, Option<GBufferPass>)> {
+        if !prepass {
+            return Ok((GBufferPass::variant(ctx, scene, frame, gbuffer, GBufferVariant::Full)?, None));
+        }
+        let over = GBufferPass::variant(ctx, scene, frame, gbuffer, GBufferVariant::OverPrepass)?;
+        Ok((over, Some(GBufferPass::variant(ctx, scene, frame, gbuffer, GBufferVariant::DepthPrepass)?)))
     }
 
     pub fn variant(
@@ -248,7 +256,10 @@ impl Pass for GBufferPass {
             self.pipeline.bind(cmd, &[self.set.raw()]);
             super::set_viewport(ctx, cmd, extent);
             match (self.variant, &self.masked) {
-                (GBufferVariant::Full, _) => self.scene.draw_all(ctx, cmd),
+                (GBufferVariant::Full, _) => {
+                    self.scene.draw_where(ctx, cmd, |d| !d.masked);
+                    self.scene.draw_where(ctx, cmd, |d| d.masked);
+                }
                 (GBufferVariant::DepthPrepass, _) => self.scene.draw_where(ctx, cmd, |d| !d.masked),
                 (GBufferVariant::OverPrepass, masked) => {
                     self.scene.draw_where(ctx, cmd, |d| !d.masked);

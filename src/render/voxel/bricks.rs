@@ -1,6 +1,7 @@
 //! The bricked (sparse) layout of the voxel volumes: each volume stores only the bricks of
 //! 8^3 texels that hold something, in a pool (a 3D image of bricks side by side), found
-//! through a map of the grid's bricks (R32_UINT: 0 = not resident, else pool slot + 1).
+//! through a map of the grid's bricks (R32_UINT: 0 = not resident, else where the brick's slot
+//! lies in the pool image: [`Pool::entry_slot`]).
 //! docs/SPARSE.md says why this layout and not sparse residency, with the measurements.
 //!
 //! Pool 0 holds the full-resolution volumes (albedo, normal, emission, flags, sums, radiance,
@@ -28,6 +29,10 @@ pub const BRICK: u32 = 8;
 pub const DENSE_SIDE: u32 = 64;
 /// Pools: full resolution and up to three directional levels (grids up to 1024^3).
 pub const MAX_POOLS: usize = 4;
+/// Set in the map entry of a resident brick (bricks.glsl), above its slot's 10-bit axes.
+pub const BRICK_RESIDENT: u32 = 1 << 30;
+/// Slots per axis a map entry can address.
+pub const MAX_SLOTS_PER_AXIS: u32 = 1 << 10;
 
 /// One pool: the bricks of one level of the grid.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -69,6 +74,13 @@ impl Pool {
     /// Bricks of the grid at this level (the map's entries).
     pub fn map_entries(&self) -> u64 {
         u64::from(self.map_side).pow(3)
+    }
+
+    /// The slot, per axis of the pool image, of map entry `entry` (bricks.glsl's `slot_entry`:
+    /// the position with [`BRICK_RESIDENT`] set, 10 bits per axis); `None` for a brick that is
+    /// not resident (0) or marked but not allocated.
+    pub fn entry_slot(entry: u32) -> Option<[u32; 3]> {
+        (entry & !0x3fff_ffff == BRICK_RESIDENT).then(|| [entry & 0x3ff, (entry >> 10) & 0x3ff, (entry >> 20) & 0x3ff])
     }
 }
 
@@ -130,6 +142,8 @@ impl BrickLayout {
                 }
             }
             *pool = best.1;
+            // A grid of at most 1024^3 has at most 129^3 bricks a level: about 130 slots a side.
+            debug_assert!(pool.slots.iter().all(|&s| s < MAX_SLOTS_PER_AXIS), "{pool:?}");
         }
         self
     }
@@ -335,14 +349,9 @@ pub fn unpool(pool: &Pool, stride: u32, pooled: &[u8], map: &[u32], texel: usize
     let stride = stride as usize;
     let mut out = vec![0u8; side * side * side * texel];
     let m = pool.map_side as usize;
-    for (i, &entry) in map.iter().enumerate().filter(|(_, &e)| e != 0 && e != u32::MAX) {
+    for (i, slot) in map.iter().enumerate().filter_map(|(i, &e)| Some((i, Pool::entry_slot(e)?))) {
         let b = [i % m, (i / m) % m, i / (m * m)];
-        let s = (entry - 1) as usize;
-        let slot = [
-            s % pool.slots[0] as usize,
-            (s / pool.slots[0] as usize) % pool.slots[1] as usize,
-            s / (pool.slots[0] * pool.slots[1]) as usize,
-        ];
+        let slot = slot.map(|s| s as usize);
         for z in 0..BRICK as usize {
             for y in 0..BRICK as usize {
                 for x in 0..BRICK as usize {
