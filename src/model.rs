@@ -51,6 +51,13 @@ pub fn report_layout(report: &Report) -> Option<String> {
     report.modes.iter().find_map(|m| m.voxel_memory.as_ref()).map(|v| v.layout.clone())
 }
 
+/// Whether the report's frames drew the depth prepass (`render.depth_prepass`, which "auto"
+/// resolves by the device): a report from before the option has no such pass, so no prepass.
+pub fn report_depth_prepass(report: &Report) -> bool {
+    let prepass = crate::render::passes::gbuffer::DEPTH_PREPASS;
+    report.modes.iter().any(|m| m.passes.iter().any(|p| p.name == prepass))
+}
+
 /// The model's answer for one mode.
 #[derive(Debug, Clone, Serialize)]
 pub struct ModeModel {

@@ -430,9 +430,10 @@ impl Renderer {
             &prepass,
             over_counted.as_ref().map_or(&over as &dyn Pass, |c| c),
         ];
-        let mut out: Vec<RasterPassSamples> = list
+        let names = ["gbuffer", "gbuffer depth prepass (opaque draws)", "gbuffer over the prepass"];
+        let mut out: Vec<RasterPassSamples> = names
             .iter()
-            .map(|p| RasterPassSamples { name: p.name().into(), gpu_ms: vec![], host_ms: vec![], counts: None })
+            .map(|n| RasterPassSamples { name: n.to_string(), gpu_ms: vec![], host_ms: vec![], counts: None })
             .collect();
         self.scheduler.serial = true;
         for round in 0..rounds as u64 {

@@ -56,7 +56,8 @@ pub fn run(mut args: Args, given: &Given, path: &Path) -> dvsgi::Result<()> {
 }
 
 /// What the command line did not say, the report's: scene, scenario, frames, warm-up, frames
-/// in flight, its settings (before any --set given here) and the voxel layout its device used.
+/// in flight, its settings (before any --set given here), and the voxel layout and depth
+/// prepass its device used.
 fn adopt_report(args: &mut Args, given: &Given, report: &Report) -> dvsgi::Result<()> {
     if args.scene.is_none() {
         args.scene = Some(report.scene.clone().into());
@@ -94,6 +95,8 @@ fn adopt_report(args: &mut Args, given: &Given, report: &Report) -> dvsgi::Resul
     if let Some(layout) = model::report_layout(report) {
         sets.push(format!("gi.voxel_layout=\"{layout}\""));
     }
+    let prepass = if model::report_depth_prepass(report) { "on" } else { "off" };
+    sets.push(format!("render.depth_prepass=\"{prepass}\""));
     sets.append(&mut args.common.sets);
     args.common.sets = sets;
     Ok(())

@@ -80,7 +80,11 @@ impl Pool {
     /// the position with [`BRICK_RESIDENT`] set, 10 bits per axis); `None` for a brick that is
     /// not resident (0) or marked but not allocated.
     pub fn entry_slot(entry: u32) -> Option<[u32; 3]> {
-        (entry & !0x3fff_ffff == BRICK_RESIDENT).then(|| [entry & 0x3ff, (entry >> 10) & 0x3ff, (entry >> 20) & 0x3ff])
+        (entry & !0x3fff_ffff == BRICK_RESIDENT).then_some([
+            entry & 0x3ff,
+            (entry >> 10) & 0x3ff,
+            (entry >> 20) & 0x3ff,
+        ])
     }
 }
 
@@ -393,6 +397,20 @@ mod tests {
         assert_eq!(BrickLayout::pooled_levels(256), 1);
         assert_eq!(BrickLayout::pooled_levels(512), 2);
         assert_eq!(BrickLayout::pooled_levels(1024), 3);
+    }
+
+    /// Map entries as bricks.glsl writes them: the slot's position with bit 30 set.
+    #[test]
+    fn map_entries_decode_to_slot_positions() {
+        assert_eq!(Pool::entry_slot(0), None, "not resident");
+        assert_eq!(Pool::entry_slot(u32::MAX), None, "marked, not allocated (BRICK_PENDING)");
+        assert_eq!(Pool::entry_slot(BRICK_RESIDENT), Some([0, 0, 0]));
+        assert_eq!(Pool::entry_slot(BRICK_RESIDENT | 3 | (5 << 10) | (1023 << 20)), Some([3, 5, 1023]));
+        // Every arrangement a grid of 1024^3 can need fits the entry's 10 bits per axis.
+        let full = FullImages { words: 10, bytes: 1, scratch: true };
+        let layout = BrickLayout::sized(1024, &[129u64.pow(3), 65u64.pow(3), 33u64.pow(3), 17u64.pow(3)])
+            .fit(full, &|_, e, _| u64::from(e[0]) * u64::from(e[1]) * u64::from(e[2]));
+        assert!(layout.pools.iter().all(|p| p.slots.iter().all(|&s| s < MAX_SLOTS_PER_AXIS)), "{layout:?}");
     }
 
     #[test]
