@@ -20,6 +20,9 @@ layout(constant_id = 3) const uint OUTPUT = 0;  // 0 final, 1 indirect light onl
 // The specular target holds ray-traced reflections (gi.specular = "rt"): rays see occlusion
 // themselves, so the AO factor does not dim them.
 layout(constant_id = 4) const bool RT_SPECULAR = false;
+// Some material emits: the G-buffer has an emission target (else g_emission is another target,
+// not read).
+layout(constant_id = 5) const bool EMISSION = true;
 
 layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
@@ -62,7 +65,7 @@ void main() {
     vec3 V = safe_normalize(frame.camera_pos.xyz - P, N);
 
     float unscale = frame.radiance_scale.y;  // 16-bit inputs hold radiance * scale
-    vec3 radiance = texelFetch(g_emission, px, 0).rgb * unscale;
+    vec3 radiance = EMISSION ? texelFetch(g_emission, px, 0).rgb * unscale : vec3(0.0);
     vec4 traced_vis = TRACED_SHADOWS ? imageLoad(gi_shadow, px) : vec4(1.0);
     uint light_count = frame.counts.z;
     for (uint i = 0u; i < light_count; ++i) {

@@ -751,8 +751,9 @@ fn supersampled_textured_direct_light_matches_the_reference() {
 
 /// `render.depth_prepass`: the G-buffer drawn over a depth prepass of the opaque draws holds
 /// the same bytes in every target as the G-buffer drawn alone, and the frame the same radiance,
-/// with opaque and alpha-masked draws (the masked quad) and on a real scene (Dabrovic's
-/// Sponza, whose arches and columns overdraw about twice).
+/// with opaque and alpha-masked draws (the masked quad), on a real scene (Dabrovic's Sponza,
+/// whose arches and columns overdraw about twice) and with an emission target (the original
+/// Cornell box's area light; the others have none, so their G-buffer has four targets).
 #[test]
 fn the_depth_prepass_changes_no_byte() {
     let ctx = context();
@@ -760,7 +761,15 @@ fn the_depth_prepass_changes_no_byte() {
         &common::repo().join("scenes/sponza.toml"),
         &[("render.width", "96"), ("render.height", "54"), ("gi.mode", "\"none\"")],
     );
-    for (name, scene) in [("masked quad", masked_quad_scene()), ("Sponza", sponza)] {
+    let cornell = common::load(
+        &common::repo().join("scenes/cornell-original.toml"),
+        &[("render.width", "64"), ("render.height", "64"), ("gi.mode", "\"none\"")],
+    );
+    assert!(
+        cornell.materials.iter().any(|m| m.emission.max_element() > 0.0),
+        "the original Cornell box's area light emits"
+    );
+    for (name, scene) in [("masked quad", masked_quad_scene()), ("Sponza", sponza), ("Cornell box", cornell)] {
         let mut runs = Vec::new();
         for prepass in [DepthPrepass::Off, DepthPrepass::On] {
             let mut s = scene.clone();
@@ -776,7 +785,9 @@ fn the_depth_prepass_changes_no_byte() {
             runs.push((targets, r.output().radiance));
         }
         let ((off, off_radiance), (on, on_radiance)) = (&runs[0], &runs[1]);
-        assert_eq!(off.len(), 5, "{name}: depth and four colour targets");
+        // Depth, albedo, normal, specular, and emission where some material emits.
+        let emits = scene.materials.iter().any(|m| m.emission.max_element() > 0.0);
+        assert_eq!(off.len(), 4 + usize::from(emits), "{name}: the G-buffer's targets");
         for ((target, a), (_, b)) in off.iter().zip(on) {
             let differ = a.iter().zip(b).filter(|(x, y)| x != y).count();
             assert!(differ == 0, "{name}: {target}: {differ} of {} bytes differ with the prepass", a.len());

@@ -274,7 +274,7 @@ mod tests {
         // (a 16-word header and one 8^3 brick).
         assert_eq!(e.volumes, 2 * 2048 + 4096 + 2 * 4096 + 6 * 73 * 8 + 64 + 2 * 4 + 8 + 1 + 7 * 2048 + 4 * 17);
         assert_eq!(e.largest_volume, 4096);
-        assert_eq!(e.targets, 100 * 48 + 100 * 8, "G-buffer, radiance, display, diffuse cones");
+        assert_eq!(e.targets, 100 * 40 + 100 * 8, "G-buffer (no emission), radiance, display, diffuse cones");
         scene.settings.gi.mode = GiMode::None;
         assert_eq!(Estimate::of(&scene).volumes, 0);
         // 512^3 with one bounce: albedo, normal 0.5 GiB each, radiance, bounced and scratch

@@ -633,8 +633,9 @@ impl FrameTargets {
     /// shadow cache, the resolved radiance and the rays' visibility.
     pub fn all(&self) -> Vec<&Arc<Image>> {
         let g = &self.gbuffer;
-        [&g.depth, &g.albedo, &g.normal, &g.specular, &g.emission, &self.shadow_atlas, &self.radiance, &self.display]
+        [&g.depth, &g.albedo, &g.normal, &g.specular, &self.shadow_atlas, &self.radiance, &self.display]
             .into_iter()
+            .chain(&g.emission)
             .chain(&self.shadow_cache)
             .chain(&self.resolved)
             .chain(&self.rt_visibility)
@@ -680,7 +681,7 @@ impl FramePasses {
     ) -> GpuResult<FramePasses> {
         let s = &scene.settings;
         let (width, height) = plan.internal;
-        let gbuffer = Arc::new(GBuffer::new(ctx, width, height)?);
+        let gbuffer = Arc::new(GBuffer::new(ctx, width, height, plan.emission)?);
         let atlas = shadow_atlas(ctx, s.shadow_map_size, plan.shadow_views)?;
         let (radiance, display, resolve) = output_images(ctx, s)?;
         let shown = resolve.as_ref().map_or(&radiance, |r| &r.resolved).clone();

@@ -56,6 +56,8 @@ pub struct FramePlan {
     pub cones: bool,
     /// The cones' specular target: some material is glossy and `gi.specular` is not off.
     pub specular: bool,
+    /// Some material emits: the G-buffer has an emission target.
+    pub emission: bool,
     /// Ray-traced reflections fill that target (`gi.specular = "rt"`).
     pub rt_reflections: bool,
     /// The first four lights' shadows are cone-traced (`gi.shadows = "cone"`).
@@ -119,6 +121,7 @@ impl FramePlan {
             voxels,
             cones,
             specular,
+            emission: scene.materials.iter().any(|m| m.emission.max_element() > 0.0),
             rt_reflections: specular && s.gi.specular == SpecularSource::Rt,
             cone_shadows,
             rt_shadows,
@@ -151,10 +154,12 @@ impl FramePlan {
             Target::new("gbuffer albedo", ALBEDO_FORMAT, internal),
             Target::new("gbuffer normal", NORMAL_FORMAT, internal),
             Target::new("gbuffer specular", SPECULAR_FORMAT, internal),
-            Target::new("gbuffer emission", EMISSION_FORMAT, internal),
             Target::new("radiance", RADIANCE_FORMAT, internal),
             Target::new("display", DISPLAY_FORMAT, self.output),
         ];
+        if self.emission {
+            t.push(Target::new("gbuffer emission", EMISSION_FORMAT, internal));
+        }
         if self.internal != self.output {
             t.push(Target::new("resolved radiance", RADIANCE_FORMAT, self.output));
         }
@@ -353,8 +358,14 @@ mod tests {
         let maps: u64 = targets.iter().filter(|t| t.shadow_map).map(Target::bytes).sum();
         let side = u64::from(scene.settings.shadow_map_size);
         assert_eq!(maps, 6 * 4 * side * side, "six cube faces of 32-bit depth");
-        let gbuffer: u64 = targets.iter().filter(|t| t.name.starts_with("gbuffer")).map(Target::bytes).sum();
-        assert_eq!(gbuffer, 80 * 60 * (4 + 4 + 8 + 4 + 8));
+        let gbuffer = |targets: &[Target]| -> u64 {
+            targets.iter().filter(|t| t.name.starts_with("gbuffer")).map(Target::bytes).sum()
+        };
+        assert_eq!(gbuffer(&targets), 80 * 60 * (4 + 4 + 8 + 4), "no material emits: no emission target");
+        scene.materials[0].emission = Vec3::splat(2.0);
+        let plan = FramePlan::of(&scene);
+        assert!(plan.emission);
+        assert_eq!(gbuffer(&plan.targets()), 80 * 60 * (4 + 4 + 8 + 4 + 8), "and with the emission target");
     }
 
     #[test]

@@ -1,4 +1,5 @@
-//! G-buffer by dynamic rendering: depth, linear albedo, normal + shininess, specular, emission.
+//! G-buffer by dynamic rendering: depth, linear albedo, normal + shininess, specular, and
+//! emission where some material emits.
 
 use crate::gpu::{shaders, Access, Context, GpuResult, GraphicsDesc, Image, ImageDesc, Pipeline, Sampler};
 use crate::render::binding::{Binds, PassSet};
@@ -22,11 +23,13 @@ pub struct GBuffer {
     pub albedo: Arc<Image>,
     pub normal: Arc<Image>,
     pub specular: Arc<Image>,
-    pub emission: Arc<Image>,
+    /// Only where some material emits (`FramePlan::emission`): a target less to write.
+    pub emission: Option<Arc<Image>>,
 }
 
 impl GBuffer {
-    pub fn new(ctx: &Arc<Context>, width: u32, height: u32) -> GpuResult<GBuffer> {
+    /// The targets, with an emission target where `emission`.
+    pub fn new(ctx: &Arc<Context>, width: u32, height: u32, emission: bool) -> GpuResult<GBuffer> {
         // TRANSFER_SRC: tests and debugging read every target back.
         let color =
             vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC;
@@ -44,7 +47,7 @@ impl GBuffer {
             albedo: mk("gbuffer albedo", ALBEDO_FORMAT, color)?,
             normal: mk("gbuffer normal", NORMAL_FORMAT, color)?,
             specular: mk("gbuffer specular", SPECULAR_FORMAT, color)?,
-            emission: mk("gbuffer emission", EMISSION_FORMAT, color)?,
+            emission: emission.then(|| mk("gbuffer emission", EMISSION_FORMAT, color)).transpose()?,
         })
     }
     /// Point sampling for compute passes that read the G-buffer texel by texel.
@@ -70,8 +73,15 @@ impl GBuffer {
         )
     }
 
-    pub fn colors(&self) -> [&Arc<Image>; 4] {
-        [&self.albedo, &self.normal, &self.specular, &self.emission]
+    /// The colour targets, in attachment order.
+    pub fn colors(&self) -> Vec<&Arc<Image>> {
+        [&self.albedo, &self.normal, &self.specular].into_iter().chain(&self.emission).collect()
+    }
+
+    /// The emission target, or (where there is none) the albedo to bind in its place: the
+    /// reader's EMISSION specialization constant says which.
+    pub fn emission_or_albedo(&self) -> &Arc<Image> {
+        self.emission.as_ref().unwrap_or(&self.albedo)
     }
 }
 
@@ -106,14 +116,19 @@ pub struct GBufferPass {
 
 const COLOR_FORMATS: [vk::Format; 4] = [ALBEDO_FORMAT, NORMAL_FORMAT, SPECULAR_FORMAT, EMISSION_FORMAT];
 
-/// The G-buffer's pipeline: every target, or (`colors` false) depth only; depth written or not.
+/// The G-buffer's pipeline: every target of `gbuffer`, or (`colors` false) depth only; depth
+/// written or not.
 fn pipeline(
     ctx: &Arc<Context>,
-    scene: &SceneGpu,
+    (scene, gbuffer): (&SceneGpu, &GBuffer),
     set: &PassSet,
     colors: bool,
     depth_write: bool,
 ) -> GpuResult<Pipeline> {
+    let (frag, formats) = match gbuffer.emission {
+        Some(_) => (shaders::GBUFFER_FRAG, &COLOR_FORMATS[..]),
+        None => (shaders::GBUFFER_NO_EMISSION_FRAG, &COLOR_FORMATS[..3]),
+    };
     Pipeline::graphics(
         ctx,
         "gbuffer",
@@ -121,8 +136,8 @@ fn pipeline(
             vertex_attributes: &[0, 1, 2],
             vert: shaders::GBUFFER_VERT,
             geom: None,
-            frag: colors.then_some(shaders::GBUFFER_FRAG),
-            color_formats: if colors { &COLOR_FORMATS } else { &[] },
+            frag: colors.then_some(frag),
+            color_formats: if colors { formats } else { &[] },
             depth_format: Some(DEPTH_FORMAT),
             depth_test: true,
             depth_write,
@@ -167,11 +182,12 @@ impl GBufferPass {
             .extend(scene.materials.binds())
             .sampler(scene.materials.sampler.raw)
             .build(ctx, "gbuffer", vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)?;
+        let g = (&**scene, &**gbuffer);
         let (pipeline, masked) = match variant {
-            GBufferVariant::Full => (pipeline(ctx, scene, &set, true, true)?, None),
-            GBufferVariant::DepthPrepass => (pipeline(ctx, scene, &set, false, true)?, None),
+            GBufferVariant::Full => (pipeline(ctx, g, &set, true, true)?, None),
+            GBufferVariant::DepthPrepass => (pipeline(ctx, g, &set, false, true)?, None),
             GBufferVariant::OverPrepass => {
-                (pipeline(ctx, scene, &set, true, false)?, Some(pipeline(ctx, scene, &set, true, true)?))
+                (pipeline(ctx, g, &set, true, false)?, Some(pipeline(ctx, g, &set, true, true)?))
             }
         };
         Ok(GBufferPass {
@@ -231,7 +247,7 @@ impl Pass for GBufferPass {
         };
         let mut uses = vec![depth];
         if self.variant != GBufferVariant::DepthPrepass {
-            uses.extend(g.colors().map(|c| Use::overwrite(c, Access::ColorAttachmentWrite)));
+            uses.extend(g.colors().into_iter().map(|c| Use::overwrite(c, Access::ColorAttachmentWrite)));
         }
         uses
     }

@@ -94,7 +94,7 @@ impl LightingPass {
             .sampled(&gbuffer.albedo, point.raw, read)
             .sampled(&gbuffer.normal, point.raw, read)
             .sampled(&gbuffer.specular, point.raw, read)
-            .sampled(&gbuffer.emission, point.raw, read)
+            .sampled(gbuffer.emission_or_albedo(), point.raw, read)
             .sampled(shadow_atlas, compare.raw, depth)
             .storage_image(radiance, Access::ComputeShaderWrite)
             .overwritten()
@@ -108,6 +108,7 @@ impl LightingPass {
             (2, u32::from(shadow_visibility.is_some())),
             (3, output as u32),
             (4, u32::from(targets.specular.is_some() && rt_specular)),
+            (5, u32::from(gbuffer.emission.is_some())),
         ];
         let pipeline =
             Pipeline::compute(ctx, "deferred lighting", shaders::DEFERRED_LIGHT_COMP, &[set.layout()], 0, &spec)?;
