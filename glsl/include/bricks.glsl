@@ -2,11 +2,12 @@
 // only resident bricks of 8^3 texels, side by side in a pool image; a map per pool (R32_UINT,
 // one texel per brick of the grid) holds 0 for a brick that is not resident, else where its
 // slot lies in the pool (brick_entry below). Pool 0 holds the full-resolution volumes; pools
-// 1.. the directional levels larger than 64^3. Every volume that is sampled with hardware trilinear filtering (pool 0's radiance
-// volumes, every directional level) stores each brick with a one-texel apron on its low side
-// (9^3: texels 8b-1 .. 8b+7 of brick b per axis), so a filter stays inside one brick; a brick
-// is resident when any of its 9^3 texels can be non-empty. Pool 0's integer volumes (albedo,
-// normal, emission, flags, sums) share its slots without the apron (8^3 per slot).
+// 1.. the directional levels larger than 64^3. Every volume that is sampled with hardware
+// trilinear filtering (pool 0's radiance volumes, every directional level) stores each brick
+// with a one-texel apron on its low side (9^3: texels 8b-1 .. 8b+7 of brick b per axis), so a
+// filter stays inside one brick; a brick is resident when any of its 9^3 texels can be
+// non-empty. Pool 0's integer volumes (albedo, normal, emission, flags, sums) share its slots
+// without the apron (8^3 per slot).
 // With grid.dims.z == 0 the volumes are dense and these helpers are the identity.
 //
 // The including shader declares, before including this file:
