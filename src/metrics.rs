@@ -258,19 +258,7 @@ pub fn display_exposure(settings: &crate::scene::RenderSettings, img: &LinearIma
 ///
 /// A pixel with any non-finite channel becomes magenta (255, 0, 255), as in the renderer.
 pub fn display_srgb8(img: &LinearImage, exposure: f32, tonemap_mode: ToneMap) -> Vec<u8> {
-    let scale = exposure.exp2();
-    let mut out = Vec::with_capacity(img.rgb.len());
-    for px in img.rgb.chunks_exact(3) {
-        if px.iter().any(|v| !v.is_finite()) {
-            out.extend_from_slice(&[255, 0, 255]);
-            continue;
-        }
-        for &v in px {
-            let d = linear_to_srgb(tonemap(v * scale, tonemap_mode));
-            out.push((d * 255.0 + 0.5) as u8);
-        }
-    }
-    out
+    display_unrounded(img, exposure, tonemap_mode).into_iter().map(|v| (v + 0.5) as u8).collect()
 }
 
 /// [`display_srgb8`] before its rounding: each value times 255 (magenta for non-finite pixels).
