@@ -4,8 +4,9 @@
 // volume of direction +x the block's front voxel along x is composited over its back voxel
 // (premultiplied "over": c = c_front + (1 - a_front) c_back) for each of the four rows, and
 // the four rows are averaged. Same for -x (front = high x), +y, -y, +z, -z. Texels are stored
-// as (L * tau, tau) (voxel.glsl); the full-resolution volume holds (L, occupancy 0 or 1),
-// which is premultiplied already. With bricked volumes (bricks.glsl) a pooled level is
+// as (L * tau, tau) for trilinear cone samples, or premultiplied (c, alpha) for two-tap ones
+// (TWO_TAP; voxel.glsl); the full-resolution volume holds (L, occupancy 0 or 1), which is
+// premultiplied already. With bricked volumes (bricks.glsl) a pooled level is
 // written brick by brick over its resident bricks (indirect), and read through its map.
 #include "common.glsl"
 #include "voxel.glsl"
@@ -19,6 +20,16 @@ layout(constant_id = 0) const bool FROM_FULL = true;
 // texel; else the pool's resident bricks).
 layout(constant_id = 1) const int SRC_POOL = 0;
 layout(constant_id = 2) const int DST_POOL = 0;
+// gi.cone_filter = "two-tap": texels hold opacity rather than optical depth.
+layout(constant_id = 3) const bool TWO_TAP = false;
+
+vec4 stored(vec4 premultiplied) {
+    return TWO_TAP ? premultiplied : tau_from_alpha(premultiplied);
+}
+
+vec4 premultiplied(vec4 texel) {
+    return TWO_TAP ? texel : alpha_from_tau(texel);
+}
 
 layout(set = 0, binding = 0, rgba16f) uniform readonly image3D src[6];
 layout(set = 0, binding = 1, rgba16f) uniform writeonly image3D dst[6];
@@ -59,7 +70,7 @@ void find_block(ivec3 base) {
         int i = o.x + 2 * o.y + 4 * o.z;                                              \
         if (FROM_FULL) return full_block[i];                                          \
         ivec3 t = block_texel[i];                                                     \
-        return t.x < 0 ? vec4(0.0) : alpha_from_tau(imageLoad(src[FACE], t));        \
+        return t.x < 0 ? vec4(0.0) : premultiplied(imageLoad(src[FACE], t));         \
     }
 DEFINE_LOAD(0)
 DEFINE_LOAD(1)
@@ -80,7 +91,7 @@ DEFINE_LOAD(5)
                 acc += over(LOAD(FACE, front), LOAD(FACE, back));                 \
             }                                                                     \
         }                                                                         \
-        imageStore(dst[FACE], store_at, min(tau_from_alpha(acc * 0.25), vec4(HALF_MAX)));  \
+        imageStore(dst[FACE], store_at, min(stored(acc * 0.25), vec4(HALF_MAX)));         \
     }
 
 void main() {

@@ -283,6 +283,51 @@ fn closed_emissive_box_reaches_le_over_one_minus_rho() {
     assert_no_validation_messages(&ctx);
 }
 
+/// `gi.cone_filter = "two-tap"` (opacity filtered across each cone, optical depth along it):
+/// walls stay opaque (the closed emissive box still returns rho Le per bounce through the
+/// cones, as with trilinear samples), and a surface that covers part of a footprint no
+/// longer occludes all of it, so the Cornell box's walls, too bright with trilinear samples
+/// (ACCURACY.md), lose part of their excess, and the whole image's indirect light with them.
+#[test]
+fn two_tap_cone_samples_keep_walls_opaque_and_partial_cover_partial() {
+    let ctx = context();
+    let tris = closed_box();
+    let (rho, le) = (0.5f32, 1.0f32);
+    let mut furnace = scene_of(
+        vec![mesh("box", &tris, 0, None)],
+        vec![material("furnace", rho, Vec3::splat(le))],
+        inside_camera(),
+        vec![],
+        Aabb { min: Vec3::splat(-0.55), max: Vec3::splat(0.55) },
+    );
+    furnace.settings.gi.bounces = 0;
+    furnace.settings.gi.cone_filter = dvsgi::scene::ConeFilter::TwoTap;
+    furnace.settings.view = dvsgi::scene::View::Indirect;
+    let (out, _) = render(&ctx, furnace);
+    let mean = out.radiance.chunks_exact(4).map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0).sum::<f64>()
+        / (out.radiance.len() / 4) as f64;
+    eprintln!("one bounce by two-tap cones in the closed box: {mean:.4} (rho Le = {})", rho * le);
+    assert!((mean / (rho * le) as f64 - 1.0).abs() < 0.06, "two-tap: {mean:.4} vs {}", rho * le);
+
+    let truth = minus(&data("cornell-64.exr"), &data("cornell-64-direct.exr"));
+    let indirect = |filter: &str| {
+        let (out, scene) = render(&ctx, cornell(&[("render.view", "\"indirect\""), ("gi.cone_filter", filter)]));
+        let map = RegionMap::trace(&scene, 64, 64);
+        region_stats(&map, &Pair { test: &linear(&out), reference: &truth, reference_variance: None })
+    };
+    let (trilinear, two_tap) = (indirect("\"trilinear\""), indirect("\"two-tap\""));
+    for name in ["backWall -z", "leftWall -x", "rightWall +x"] {
+        let region = format!("box/{name}");
+        let (a, b) =
+            (stats(&trilinear, Grouping::Surface, &region).ratio, stats(&two_tap, Grouping::Surface, &region).ratio);
+        eprintln!("{name}: indirect {a:.3} of the reference's with trilinear samples, {b:.3} with two taps");
+        assert!(a > 1.0 && b < a - 0.03 && b > 0.9, "{name}: trilinear {a:.3}, two-tap {b:.3}");
+    }
+    let (a, b) = (trilinear[0].ratio, two_tap[0].ratio);
+    eprintln!("indirect energy: trilinear {a:.3}, two-tap {b:.3}");
+    assert!((b - 1.0).abs() < (a - 1.0).abs(), "indirect energy: trilinear {a:.3}, two-tap {b:.3}");
+}
+
 /// A lone lit plane receives (almost) no indirect light: its cones must not see its own
 /// voxels, at any voxel resolution.
 #[test]

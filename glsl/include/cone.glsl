@@ -77,21 +77,138 @@ vec4 sample_full(vec3 uvw) {
     return textureLod(vox_lod0, p.xyz / vec3(grid.pools[0].xyz * 9u), 0.0);
 }
 
+// gi.cone_filter = "two-tap" (voxel.glsl). A texel holds what a path through it along its axis meets: the
+// opacity composited along the axis and averaged across it (aniso_mip.comp). A sample at
+// texel coordinate u between two texel centres along the axis takes one tap on each centre
+// plane, so the sampler filters each only across the axis (bilinear) and opacity, which is
+// what partial coverage across averages, is what it filters. The two taps are then blended
+// in optical depth, which is what adds along the path: a thin wall split between two samples
+// arrives whole, and a surface covering part of the footprint occludes that part, not all of
+// it. Positions in texels of the level; `at` is the sample's coordinate along the axis.
+struct AlongTaps {
+    float first;   // the lower centre plane's coordinate, texels
+    float weight;  // the upper plane's share
+};
+
+AlongTaps along_taps(float at) {
+    float below = floor(at - 0.5);
+    return AlongTaps(below + 0.5, at - 0.5 - below);
+}
+
+vec4 blend_along(vec4 lower, vec4 upper, float weight) {
+    return mix(tau_from_alpha(lower), tau_from_alpha(upper), weight);
+}
+
+// Volume `v` at its level d (`side` texels a side), `axis` its direction's axis, at normalized uvw.
+vec4 dense_along(sampler3D v, vec3 uvw, int axis, int d, float side) {
+    AlongTaps t = along_taps(uvw[axis] * side);
+    vec3 a = uvw, b = uvw;
+    a[axis] = t.first / side;
+    b[axis] = (t.first + 1.0) / side;
+    return blend_along(textureLod(v, a, float(d)), textureLod(v, b, float(d)), t.weight);
+}
+
+// The same for pooled level l: `p` is the sample's pool texel position (level_lookup) and `at`
+// its coordinate along the axis in the level's texels; the two taps stay in p's brick.
+// `taps` = along_taps(at).
+#define POOLED_ALONG(face, axis, l, p, at, taps, inv_pool)                                         \
+    blend_along(POOLED_FACE(face, l, shifted(p, axis, taps.first - (at), inv_pool)),              \
+                POOLED_FACE(face, l, shifted(p, axis, taps.first + 1.0 - (at), inv_pool)), taps.weight)
+
+vec3 shifted(vec3 p, int axis, float by, vec3 inv_pool) {
+    p[axis] += by;
+    return p * inv_pool;
+}
+
+vec4 axis_blend(vec4 x, vec4 y, vec4 z, vec3 dir) {
+    vec3 w = dir * dir;
+    return (x * w.x + y * w.y + z * w.z) / max(w.x + w.y + w.z, 1e-12);
+}
+
+// Two-tap: the directional volumes at integer level l, blended by the squared components of
+// `dir` as anisotropic_level does. Returns (L * tau, tau).
+vec4 two_tap_level(vec3 uvw, vec3 dir, int l) {
+    int pooled = int(grid.dims.y);
+    vec4 x, y, z;
+    if (l >= pooled) {
+        int d = l - pooled;
+        float side = float(int(grid.dims.x) >> (l + 1));
+        x = dir.x >= 0.0 ? dense_along(aniso[0], uvw, 0, d, side) : dense_along(aniso[1], uvw, 0, d, side);
+        y = dir.y >= 0.0 ? dense_along(aniso[2], uvw, 1, d, side) : dense_along(aniso[3], uvw, 1, d, side);
+        z = dir.z >= 0.0 ? dense_along(aniso[4], uvw, 2, d, side) : dense_along(aniso[5], uvw, 2, d, side);
+    } else {
+        // One map lookup serves the three faces.
+        vec3 pos = uvw * float(pool_level_side(l + 1));
+        vec4 p = level_lookup(l + 1, pos);
+        if (p.w == 0.0) return vec4(0.0);
+        vec3 inv_pool = 1.0 / vec3(grid.pools[l + 1].xyz * 9u);
+        AlongTaps tx = along_taps(pos.x), ty = along_taps(pos.y), tz = along_taps(pos.z);
+        x = dir.x >= 0.0 ? POOLED_ALONG(0, 0, l, p.xyz, pos.x, tx, inv_pool)
+                         : POOLED_ALONG(1, 0, l, p.xyz, pos.x, tx, inv_pool);
+        y = dir.y >= 0.0 ? POOLED_ALONG(2, 1, l, p.xyz, pos.y, ty, inv_pool)
+                         : POOLED_ALONG(3, 1, l, p.xyz, pos.y, ty, inv_pool);
+        z = dir.z >= 0.0 ? POOLED_ALONG(4, 2, l, p.xyz, pos.z, tz, inv_pool)
+                         : POOLED_ALONG(5, 2, l, p.xyz, pos.z, tz, inv_pool);
+    }
+    return axis_blend(x, y, z, dir);
+}
+
+// Two-tap: the directional volumes at fractional `level`, the two integer levels blended in
+// optical depth.
+vec4 two_tap_directional(vec3 uvw, vec3 dir, float level) {
+    int l = int(floor(level));
+    float f = level - float(l);
+    vec4 a = two_tap_level(uvw, dir, l);
+    return f > 0.0 ? mix(a, two_tap_level(uvw, dir, l + 1), f) : a;
+}
+
+// Opacity of an occupied full-resolution voxel: optical depth VOXEL_TAU.
+const float VOXEL_ALPHA = 1.0 - 1.0 / 256.0;
+
+// Two-tap: the full-resolution radiance (L, occupancy; premultiplied) as (L * tau, tau): two
+// taps along the axis the cone travels most along, as for the directional volumes. Bricked, both
+// taps are in the brick whose 9^3 texels (apron included) hold the whole filter, found by
+// one map lookup.
+vec4 two_tap_full(vec3 uvw, vec3 dir) {
+    vec3 m = abs(dir);
+    int axis = m.x >= m.y && m.x >= m.z ? 0 : (m.y >= m.z ? 1 : 2);
+    float res = float(grid.dims.x);
+    vec3 pos = uvw * res;
+    AlongTaps t = along_taps(pos[axis]);
+    vec3 a = pos, b = pos;
+    a[axis] = t.first;
+    b[axis] = t.first + 1.0;
+    vec3 scale = vec3(1.0 / res);
+    if (bricked()) {
+        vec4 p = level_lookup(0, pos);
+        if (p.w == 0.0) return vec4(0.0);
+        a += p.xyz - pos;
+        b += p.xyz - pos;
+        scale = 1.0 / vec3(grid.pools[0].xyz * 9u);
+    }
+    vec4 lower = textureLod(vox_lod0, a * scale, 0.0) * VOXEL_ALPHA;
+    vec4 upper = textureLod(vox_lod0, b * scale, 0.0) * VOXEL_ALPHA;
+    return blend_along(lower, upper, t.weight);
+}
+
 // Quadrilinear sample at voxel-space position g and level of detail `lod` (log2 of the
 // texel size in voxels): below 1 the full-resolution volume blends into the directional
-// volumes' level 0 (which is lod 1); above, the directional mips blend trilinearly.
+// volumes' level 0 (which is lod 1); above, the directional mips blend trilinearly. Two-tap
+// filtering (gi.cone_filter) takes two lookups where trilinear takes one.
 // Returns (L * tau, tau): radiance weighted by optical depth across one texel.
 vec4 sample_voxels(vec3 g, vec3 dir, float lod) {
     vec3 uvw = g / float(grid.dims.x);
     float top = float(gi.counts.z);  // lod of the last directional level + 1
     lod = clamp(lod, 0.0, top);
-    if (lod < 1.0) {
-        // Occupied full-resolution voxels (radiance L, alpha 1) have optical depth VOXEL_TAU.
-        vec4 full = sample_full(uvw) * VOXEL_TAU;
-        if (lod <= 0.0) return full;
-        return mix(full, sample_anisotropic(uvw, dir, 0.0), lod);
+    if ((gi.counts.w & GI_FLAG_TWO_TAP) != 0u) {
+        if (lod >= 1.0) return two_tap_directional(uvw, dir, lod - 1.0);
+        vec4 full = two_tap_full(uvw, dir);
+        return lod <= 0.0 ? full : mix(full, two_tap_directional(uvw, dir, 0.0), lod);
     }
-    return sample_anisotropic(uvw, dir, lod - 1.0);
+    if (lod >= 1.0) return sample_anisotropic(uvw, dir, lod - 1.0);
+    // Occupied full-resolution voxels (radiance L, alpha 1) have optical depth VOXEL_TAU.
+    vec4 full = sample_full(uvw) * VOXEL_TAU;
+    return lod <= 0.0 ? full : mix(full, sample_anisotropic(uvw, dir, 0.0), lod);
 }
 
 // What a path of `depth` texels through sample `smp` (L * tau, tau) adds: premultiplied

@@ -13,12 +13,19 @@ struct VoxelGrid {
                      // w bricks per side of its map; 0 full resolution, 1.. directional levels
 };
 
-// Opacity in the cone-traced volumes is kept as optical depth: a directional texel holds
-// (L * tau, tau), the optical depth tau across the texel along its axis and the radiance L
-// weighted by it. Optical depth adds along a path and is linear under filtering, so a thin
-// opaque wall stays opaque however the trilinear weights of successive cone samples split it
-// (interpolating opacity instead lets ~1/6 of the light through every wall). An occupied
-// full-resolution voxel is opaque: optical depth VOXEL_TAU (transmittance 1/256).
+// Opacity in the cone-traced volumes. A directional texel describes what a path through it
+// along its axis meets: the opacity composited along the axis and averaged across it
+// (aniso_mip.comp), so a surface covering part of the texel's cross-section counts as that
+// part. It is stored in one of two forms, as gi.cone_filter asks (cone.glsl):
+// * "trilinear": (L * tau, tau), optical depth tau = -ln(1 - alpha) and the radiance L
+//   weighted by it. Optical depth adds along a path and is linear under filtering, so a thin
+//   opaque wall stays opaque however the trilinear weights of successive cone samples split
+//   it (interpolating opacity lets ~1/6 of the light through every wall). But the filter also
+//   blends optical depth across the cone, where opacity is what averages: a footprint that a
+//   surface covers in part comes out nearly opaque.
+// * "two-tap": premultiplied (c, alpha). Each cone sample filters opacity across the axis and
+//   blends optical depth along it, each where it belongs.
+// An occupied full-resolution voxel is opaque: optical depth VOXEL_TAU (transmittance 1/256).
 const float VOXEL_TAU = 5.545177;  // ln(256)
 
 // Premultiplied (c, alpha) -> (L * tau, tau), and back.

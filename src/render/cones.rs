@@ -6,7 +6,7 @@
 //! `E = pi * sum_i L_i / N`. Each cone's axis is the cosine-weighted mean direction of its cell
 //! and, unless an aperture is given, its aperture spans the cell's solid angle.
 
-use crate::scene::GiSettings;
+use crate::scene::{ConeFilter, GiSettings};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
@@ -82,7 +82,8 @@ pub struct GpuGiParams {
     pub cones: [[f32; 4]; MAX_CONES],
     /// x tan(half aperture).
     pub cone_tan: [[f32; 4]; MAX_CONES],
-    /// x diffuse cone count, y downsample factor, z directional mip levels, w flags (1 AO).
+    /// x diffuse cone count, y downsample factor, z directional mip levels, w flags (1 AO,
+    /// 2 two-tap filtering).
     pub counts: [u32; 4],
     /// x step factor beta, y max distance (voxels), z start offset (voxels), w AO falloff per
     /// voxel.
@@ -92,6 +93,8 @@ pub struct GpuGiParams {
 }
 
 pub const GI_FLAG_AO: u32 = 1;
+/// `gi.cone_filter = "two-tap"`: the directional volumes hold opacity (glsl/include/cone.glsl).
+pub const GI_FLAG_TWO_TAP: u32 = 2;
 
 impl GpuGiParams {
     /// The parameters for `gi` on a grid of `resolution` voxels of `voxel_size`, with
@@ -106,7 +109,9 @@ impl GpuGiParams {
         let res = resolution as f32;
         let max_distance =
             if gi.max_distance > 0.0 { gi.max_distance / voxel_size.max(f32::MIN_POSITIVE) } else { res * 3f32.sqrt() };
-        p.counts = [cones.len() as u32, gi.downsample, mip_levels, if gi.ao { GI_FLAG_AO } else { 0 }];
+        let flags =
+            if gi.ao { GI_FLAG_AO } else { 0 } | if gi.cone_filter == ConeFilter::TwoTap { GI_FLAG_TWO_TAP } else { 0 };
+        p.counts = [cones.len() as u32, gi.downsample, mip_levels, flags];
         p.trace = [gi.step, max_distance.min(res * 3f32.sqrt()), gi.start_offset, gi.ao_falloff / res];
         p.shadow =
             [(gi.shadow_cone_angle * 0.5).to_radians().min(MAX_HALF_ANGLE_DEG.to_radians()).tan(), 0.0, 0.0, 0.0];

@@ -398,6 +398,7 @@ pub(crate) const GI_KEYS: &[&str] = &[
     "ao_falloff",
     "shadows",
     "shadow_cone_angle",
+    "cone_filter",
     "step",
     "max_distance",
     "start_offset",

@@ -448,6 +448,21 @@ pub enum VoxelAttenuation {
     NDotL,
 }
 
+/// How a cone sample filters the directional volumes (glsl/include/cone.glsl, ACCURACY.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ConeFilter {
+    /// One trilinear lookup per volume and level of texels holding optical depth: a thin wall
+    /// stays opaque however successive samples split it, but a footprint that a surface covers
+    /// in part is nearly opaque (walls and open corners too bright).
+    Trilinear,
+    /// Texels hold opacity; two lookups per volume and level, one on each texel plane across
+    /// the volume's axis on either side of the sample, each filtering opacity across the
+    /// axis, blended in optical depth along it: walls stay opaque and partial cover occludes
+    /// its part. Twice the lookups.
+    TwoTap,
+}
+
 /// How the voxel volumes are stored (render::voxel::bricks, docs/SPARSE.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -643,6 +658,9 @@ pub struct GiSettings {
     pub shadows: DirectShadows,
     /// Full aperture of the shadow cones in degrees.
     pub shadow_cone_angle: f32,
+    /// How each cone sample filters the directional volumes (opacity across the cone, optical
+    /// depth along it: ACCURACY.md).
+    pub cone_filter: ConeFilter,
     /// Step along a cone as a fraction of its diameter (beta).
     pub step: f32,
     /// Longest cone in world units; 0 = the grid's diagonal.
@@ -696,6 +714,7 @@ impl Default for GiSettings {
             ao_falloff: 4.0,
             shadows: DirectShadows::ShadowMap,
             shadow_cone_angle: 6.0,
+            cone_filter: ConeFilter::Trilinear,
             step: 0.5,
             max_distance: 0.0,
             start_offset: 0.0,

@@ -12,7 +12,7 @@ pub use grid::{VoxelGrid, RADIANCE_VOLUME_FORMAT};
 use crate::gpu::{Access, Buffer, Context, GpuError, GpuResult, Image, ImageDesc, Sampler};
 use crate::render::binding::Binds;
 use crate::render::cones::GpuGiParams;
-use crate::scene::{GiSettings, Scene, View, VoxelLayout};
+use crate::scene::{ConeFilter, GiSettings, Scene, View, VoxelLayout};
 use ash::vk;
 use bricks::{BrickLayout, Bricks, FullImages, MAX_POOLS};
 use bytemuck::{Pod, Zeroable};
@@ -56,6 +56,9 @@ pub struct VoxelNeeds {
     pub cones: bool,
     /// Light bounces in the voxels (0 without cones).
     pub bounces: u32,
+    /// The directional volumes hold opacity for two-tap cone samples (`gi.cone_filter`), not
+    /// optical depth.
+    pub two_tap: bool,
 }
 
 impl VoxelNeeds {
@@ -82,6 +85,7 @@ impl VoxelNeeds {
             dynamic: scene.objects.iter().any(|o| o.dynamic),
             cones,
             bounces: if cones { scene.settings.gi.bounces } else { 0 },
+            two_tap: cones && scene.settings.gi.cone_filter == ConeFilter::TwoTap,
         }
     }
 }
