@@ -93,16 +93,20 @@ void main() {
     if (t.x < 0) return;
     uint a = imageLoad(vox_albedo, t).r;
     vec3 albedo = unpack_rgb_count(a).rgb / 255.0;
-    vec3 n_avg = unpack_rgb_count(imageLoad(vox_normal, t).r).rgb / 255.0 * 2.0 - 1.0;
+    vec4 normal_word = unpack_rgb_count(imageLoad(vox_normal, t).r) / 255.0;
+    vec3 n_avg = normal_word.rgb * 2.0 - 1.0;
     vec3 N = safe_normalize(n_avg, vec3(0.0, 1.0, 0.0));
     float voxel = grid.origin.w;
     vec3 center = grid.origin.xyz + (vec3(c) + 0.5) * voxel;
+    // The surface in the voxel (voxel.glsl, SUM_OFFSET): where shadow maps are read, as the
+    // G-buffer reads them for the pixels on that surface.
+    vec3 surface = center + N * (decode_surface_offset(normal_word.a) * voxel);
     vec3 irradiance = vec3(0.0);
     for (uint i = 0u; i < frame.counts.z; ++i) {
         Light l = lights[i];
         // Not nearer than half a voxel: a voxel stands for its whole extent, over which the
         // irradiance of a light inside it averages to a finite value.
-        LightSample s = sample_light_near(l, center, 0.5 * voxel);
+        LightSample s = sample_light_near(l, surface, 0.5 * voxel);
         float att = attenuation(n_avg, s.wi);
         if (att <= 0.0 || max(s.irradiance.r, max(s.irradiance.g, s.irradiance.b)) <= 0.0) continue;
         float vis = 1.0;
@@ -111,7 +115,7 @@ void main() {
             float dist = s.distance > 0.0 ? s.distance / voxel - 1.5 : 1e30;
             vis = raymarch_visibility(g, s.wi, dist);
         } else if (l.shadow.x >= 0) {
-            vec3 P = center + N * (0.5 * voxel);
+            vec3 P = surface;
             int layer = shadow_view_index(l, P, frame.shadow.x + 1.5 * frame.shadow.y + 2.0, frame.shadow.z);
             vis = shadow_visibility(shadow_map, views[layer], layer, P, N, s.wi, s.distance,
                                     frame.shadow.x, frame.shadow.y, frame.shadow.z);

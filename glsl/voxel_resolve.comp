@@ -1,7 +1,8 @@
 #version 460
 // After a voxelization: the sums of every voxel that received samples (voxel.glsl) become the
-// averages the voxel passes read (albedo, normal, emission: RGB8 and the sample count, capped
-// at 255), and the sums are zeroed for the next voxelization. One mode per dispatch:
+// averages the voxel passes read (albedo, emission: RGB8 and the sample count, capped at 255;
+// normal: RGB8 and where the surface lies in the voxel), and the sums are zeroed for the next
+// voxelization. One mode per dispatch:
 //   COUNT  (one workgroup per 8^3 brick of the grid, dense or bricked): how many of its voxels
 //          received samples, into the scan buffer (one word per brick, in grid order).
 //   WRITE  (the same workgroups, after scan.comp turned the counts into offsets): each
@@ -48,7 +49,10 @@ void resolve(ivec3 t, uint count) {
     float n = float(min(count, 255u));
     imageStore(vox_sums[SUM_COUNT], t, uvec4(0u));
     imageStore(vox_albedo, t, uvec4(pack_rgb_count(take_mean(t, SUM_ALBEDO, count) * 255.0, n)));
-    imageStore(vox_normal, t, uvec4(pack_rgb_count(take_mean(t, SUM_NORMAL, count) * 255.0, n)));
+    // The normal volume's fourth byte holds where the surface lies (voxel.glsl, SUM_OFFSET).
+    float offset = float(max(imageLoad(vox_sums[SUM_OFFSET], t).r, 1u) - 1u);
+    imageStore(vox_sums[SUM_OFFSET], t, uvec4(0u));
+    imageStore(vox_normal, t, uvec4(pack_rgb_count(take_mean(t, SUM_NORMAL, count) * 255.0, offset)));
     if (HAS_EMISSION) {
         imageStore(vox_emission, t, uvec4(pack_rgb_count(take_mean(t, SUM_EMISSION, count) * 255.0, n)));
     }

@@ -208,6 +208,8 @@ void main() {
         nrm = keep_facing(mean, nrm, nrm);
     }
     vec3 emission = m.emission.rgb / grid.params.x;
+    // The triangle's plane normal on the side of the sample's normal (voxel.glsl, SUM_OFFSET).
+    vec3 facing = dot(face, nrm) < 0.0 ? -face : face;
 
     // A plane with slope <= 1 along u and v spans at most 3 voxels of the column.
     for (int k = k0; k <= min(k1, k0 + 3); ++k) {
@@ -228,6 +230,7 @@ void main() {
         if (earlier == 0u && pc.mark_static == 0u) list_append(vc);
         add_sample(vt, SUM_ALBEDO, albedo);
         add_sample(vt, SUM_NORMAL, nrm * 0.5 + 0.5);
+        imageAtomicMax(vox_sums[SUM_OFFSET], vt, surface_offset_word(dot(g_t0 - (voxel + 0.5), facing)));
         // Zeros count too (in the count): a half-emissive voxel emits half.
         if (HAS_EMISSION) add_sample(vt, SUM_EMISSION, emission);
         if (HAS_FLAGS && pc.mark_static != 0u) {

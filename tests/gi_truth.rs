@@ -328,6 +328,68 @@ fn two_tap_cone_samples_keep_walls_opaque_and_partial_cover_partial() {
     assert!((b - 1.0).abs() < (a - 1.0).abs(), "indirect energy: trilinear {a:.3}, two-tap {b:.3}");
 }
 
+/// The voxel light reads the shadow maps on the surface inside each voxel (voxel.glsl,
+/// SUM_OFFSET), as the pixels on that surface do: a wall under a 6 cm ledge, lit by a sun 13
+/// degrees off the wall's plane (the ledge shadows 25 cm of it), has voxels as dark as its
+/// pixels there. The wall lies 0.07 voxels into its voxels (3.75 cm): read half a voxel off
+/// their centres, 3.5 cm off the wall, the point saw past the ledge's edge along the upper
+/// 15 cm of the shadow.
+#[test]
+fn the_voxel_light_is_shadowed_where_its_surface_is() {
+    let ctx = context();
+    let wall = quad(Vec3::new(0.0, 0.5, 0.5), Vec3::new(0.0, 0.5, 0.0), Vec3::new(0.0, 0.0, 0.3), Vec3::X);
+    let ledge = quad(Vec3::new(0.03, 0.8, 0.5), Vec3::new(0.03, 0.0, 0.0), Vec3::new(0.0, 0.0, 0.3), -Vec3::Y);
+    let sun = dvsgi::scene::Light {
+        name: "sun".into(),
+        kind: dvsgi::scene::LightKind::Directional {
+            direction: Vec3::new(-0.23, -0.97, 0.0).normalize(),
+            irradiance: Vec3::splat(3.0),
+        },
+        cast_shadows: true,
+        motion: Motion::None,
+    };
+    let make = |view: dvsgi::scene::View, mode: dvsgi::scene::GiMode| {
+        let mut s = scene_of(
+            vec![mesh("wall", &wall, 0, None), mesh("ledge", &ledge, 0, None)],
+            vec![material("white", 0.8, Vec3::ZERO)],
+            camera(Vec3::new(1.2, 0.5, 0.5), Vec3::new(0.0, 0.5, 0.5), 60.0),
+            vec![sun.clone()],
+            Aabb { min: Vec3::splat(-0.0775), max: Vec3::splat(1.1225) },
+        );
+        s.settings.width = 64;
+        s.settings.height = 64;
+        s.settings.view = view;
+        s.settings.gi.mode = mode;
+        s
+    };
+    let scene = make(dvsgi::scene::View::Final, dvsgi::scene::GiMode::None);
+    let tris = triangles(&scene, 0.0);
+    // Pixels showing the wall within 0.35..0.45 (lit) and 0.58..0.68 (in the ledge's shadow,
+    // which ends at 0.547).
+    let on_wall = |i: usize, lo: f32, hi: f32| {
+        let (o, d) = camera_ray(&scene, (i % 64) as u32, (i / 64) as u32);
+        raycast(&tris, o, d, 1e-4, 1e4)
+            .map(|(t, _)| o + d * t)
+            .is_some_and(|p| p.x.abs() < 1e-3 && p.y > lo && p.y < hi && (p.z - 0.5).abs() < 0.2)
+    };
+    let (direct, _) = render(&ctx, scene.clone());
+    let (voxels, _) = render(&ctx, make(dvsgi::scene::View::VoxelRadiance, dvsgi::scene::GiMode::Vct));
+    let mean = |out: &FrameOutput, lo: f32, hi: f32| {
+        let (sum, n) = sum_where(out, |i| on_wall(i, lo, hi));
+        assert!(n >= 40, "{n} pixels on the wall in {lo}..{hi}");
+        (sum.x + sum.y + sum.z) / n as f32
+    };
+    let (pixels_lit, pixels_shadow) = (mean(&direct, 0.35, 0.45), mean(&direct, 0.58, 0.68));
+    let (voxels_lit, voxels_shadow) = (mean(&voxels, 0.35, 0.45), mean(&voxels, 0.58, 0.68));
+    eprintln!(
+        "shadowed / lit under the ledge: pixels {:.3}, voxels {:.3}",
+        pixels_shadow / pixels_lit,
+        voxels_shadow / voxels_lit
+    );
+    assert!(pixels_shadow < 0.05 * pixels_lit, "the ledge shadows the pixels: {pixels_shadow} vs {pixels_lit}");
+    assert!(voxels_shadow < 0.1 * voxels_lit, "the ledge shadows the voxels: {voxels_shadow} vs {voxels_lit}");
+}
+
 /// A lone lit plane receives (almost) no indirect light: its cones must not see its own
 /// voxels, at any voxel resolution.
 #[test]

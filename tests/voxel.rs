@@ -262,8 +262,11 @@ fn voxel_averages_are_the_exact_mean_of_their_samples() {
                 assert!(err <= bound, "{what} channel {c} of voxel {i}: {stored} against {}", exact[c] * 255.0);
             }
         }
-        // The triangle's face normal (its winding): -y.
+        // The triangle's face normal (its winding): -y; in the fourth byte where the surface
+        // lies along it from the voxel's centre (voxel.glsl, SUM_OFFSET): the plane y = 10.5
+        // runs through the centres of the voxels it touches, offset 0, code 128 of 0..255.
         assert_eq!(normal[i] & 0xffffff, 128 | (128 << 16), "normal -y of voxel {i}");
+        assert_eq!(normal[i] >> 24, 128, "the surface's offset in voxel {i}");
     }
     eprintln!("{} voxels, worst error {worst:.4} of an 8-bit step", occupied.len());
     assert_no_validation_messages(&ctx);

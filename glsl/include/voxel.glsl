@@ -60,12 +60,34 @@ vec4 unpack_rgb_count(uint v) {
 // depend on the order fragments arrive in. grid.dims.w is chosen (render::voxel::sum_scale)
 // so that no sum can overflow: a voxel receives at most one sample per drawn triangle.
 // The sums are R32_UINT volumes of the full-resolution extent (pool 0 with bricks), one per
-// word: SUM_COUNT, then three per attribute (SUM_ALBEDO, SUM_NORMAL, SUM_EMISSION).
+// word: SUM_COUNT, then three per attribute (SUM_ALBEDO, SUM_NORMAL), one for the surface's
+// offset (SUM_OFFSET, below), three for SUM_EMISSION.
 const int SUM_COUNT = 0;
 const int SUM_ALBEDO = 1;
 const int SUM_NORMAL = 4;
-const int SUM_EMISSION = 7;
-const int SUM_WORDS = 10;  // with emission; 7 without
+const int SUM_OFFSET = 7;
+const int SUM_EMISSION = 8;
+const int SUM_WORDS = 11;  // with emission; 8 without
+
+// Where the surface lies in its voxel: each sample's signed distance from the voxel's centre
+// to its triangle's plane, along the sample's normal (voxel units, |d| <= sqrt(3)/2). The
+// voxel keeps the largest, the outermost surface on the normals' side (an atomic maximum:
+// order-independent like the sums), in the 8 bits of the normal volume that a count would
+// fill (voxel_resolve.comp). The voxel light reads the shadow maps there, on the surface,
+// rather than at the centre pushed off it by half a voxel, which sees past overhangs that
+// shadow the surface: at grazing light, far past (voxel_light.comp). Not the mean: where a
+// voxel holds several faces of a small object, their mean plane lies inside it, in its own
+// shadow.
+const float MAX_SURFACE_OFFSET = 0.8660254;
+
+// The offset d as the word SUM_OFFSET keeps the maximum of: 1 + its 8-bit code (0: none).
+uint surface_offset_word(float d) {
+    return 1u + uint(round(clamp(d / MAX_SURFACE_OFFSET * 0.5 + 0.5, 0.0, 1.0) * 255.0));
+}
+
+float decode_surface_offset(float e) {
+    return (e * 2.0 - 1.0) * MAX_SURFACE_OFFSET;
+}
 
 // A sample's channels in fixed point: what voxelize.frag adds to the sums.
 uvec3 sum_sample(vec3 value, uint one) {

@@ -480,7 +480,7 @@ pub enum VoxelLayout {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum VoxelOcclusion {
-    /// The frame's shadow maps, at the voxel centre pushed half a voxel along its normal.
+    /// The frame's shadow maps, read on the surface in the voxel (its outermost plane).
     ShadowMap,
     /// Marching the voxel grid towards the light (soft with `voxel_shadow_softness` > 0).
     Raymarch,

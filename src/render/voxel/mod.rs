@@ -193,7 +193,7 @@ pub fn sum_scale(scene: &Scene) -> u32 {
 /// The six directions of the directional volumes, as their names say them.
 pub const DIRECTIONS: [&str; 6] = ["+x", "-x", "+y", "-y", "+z", "-z"];
 
-const SUM_NAMES: [&str; 10] = [
+const SUM_NAMES: [&str; 11] = [
     "count",
     "albedo r",
     "albedo g",
@@ -201,18 +201,19 @@ const SUM_NAMES: [&str; 10] = [
     "normal x",
     "normal y",
     "normal z",
+    "surface offset",
     "emission r",
     "emission g",
     "emission b",
 ];
 
 /// Volumes of sums the voxelization adds to: a count, albedo and normal (three channels
-/// each), and with emission three more.
+/// each), where the surface lies in the voxel (one), and with emission three more.
 pub fn sum_words(emission: bool) -> usize {
     if emission {
-        10
+        11
     } else {
-        7
+        8
     }
 }
 
