@@ -230,22 +230,26 @@ fn inside_camera() -> Camera {
     }
 }
 
+/// The closed box of emission `le` and albedo `rho`, seen from inside (the furnace).
+fn furnace(rho: f32, le: f32) -> Scene {
+    scene_of(
+        vec![mesh("box", &closed_box(), 0, None)],
+        vec![material("furnace", rho, Vec3::splat(le))],
+        inside_camera(),
+        vec![],
+        Aabb { min: Vec3::splat(-0.55), max: Vec3::splat(0.55) },
+    )
+}
+
 /// A closed box of emission Le and albedo rho radiates Le / (1 - rho) everywhere once the
 /// bounces have converged (the furnace), here through the cones alone; the diagnostic ray
 /// gather through the voxels gets the one-bounce value rho Le.
 #[test]
 fn closed_emissive_box_reaches_le_over_one_minus_rho() {
     let ctx = context();
-    let tris = closed_box();
     let (rho, le) = (0.5f32, 1.0f32);
     let make = |extra: &dyn Fn(&mut Scene)| {
-        let mut s = scene_of(
-            vec![mesh("box", &tris, 0, None)],
-            vec![material("furnace", rho, Vec3::splat(le))],
-            inside_camera(),
-            vec![],
-            Aabb { min: Vec3::splat(-0.55), max: Vec3::splat(0.55) },
-        );
+        let mut s = furnace(rho, le);
         extra(&mut s);
         s
     };
@@ -291,15 +295,8 @@ fn closed_emissive_box_reaches_le_over_one_minus_rho() {
 #[test]
 fn two_tap_cone_samples_keep_walls_opaque_and_partial_cover_partial() {
     let ctx = context();
-    let tris = closed_box();
     let (rho, le) = (0.5f32, 1.0f32);
-    let mut furnace = scene_of(
-        vec![mesh("box", &tris, 0, None)],
-        vec![material("furnace", rho, Vec3::splat(le))],
-        inside_camera(),
-        vec![],
-        Aabb { min: Vec3::splat(-0.55), max: Vec3::splat(0.55) },
-    );
+    let mut furnace = furnace(rho, le);
     furnace.settings.gi.bounces = 0;
     furnace.settings.gi.cone_filter = dvsgi::scene::ConeFilter::TwoTap;
     furnace.settings.view = dvsgi::scene::View::Indirect;

@@ -26,9 +26,15 @@ vec4 pooled_texel(texture3D pool_image, vec3 q) {
     return textureLod(sampler3D(pool_image, pool_sampler), q, 0.0);
 }
 
+// The three directional volumes a cone travelling along `dir` samples (x, y, z: the volume of
+// each axis on the side dir points to), blended by the squared components of dir.
+vec4 axis_blend(vec4 x, vec4 y, vec4 z, vec3 dir) {
+    vec3 w = dir * dir;
+    return (x * w.x + y * w.y + z * w.z) / max(w.x + w.y + w.z, 1e-12);
+}
+
 // The directional volumes at integer level l, blended by the squared components of `dir`.
 vec4 anisotropic_level(vec3 uvw, vec3 dir, int l) {
-    vec3 w = dir * dir;
     vec4 x, y, z;
     int pooled = int(grid.dims.y);
     if (l >= pooled) {
@@ -45,7 +51,7 @@ vec4 anisotropic_level(vec3 uvw, vec3 dir, int l) {
         y = dir.y >= 0.0 ? POOLED_FACE(2, l, q) : POOLED_FACE(3, l, q);
         z = dir.z >= 0.0 ? POOLED_FACE(4, l, q) : POOLED_FACE(5, l, q);
     }
-    return (x * w.x + y * w.y + z * w.z) / max(w.x + w.y + w.z, 1e-12);
+    return axis_blend(x, y, z, dir);
 }
 
 // The directional volumes at `level`, blended by the squared components of `dir` (the
@@ -55,12 +61,11 @@ vec4 anisotropic_level(vec3 uvw, vec3 dir, int l) {
 vec4 sample_anisotropic(vec3 uvw, vec3 dir, float level) {
     int pooled = int(grid.dims.y);
     if (float(pooled) <= level) {
-        vec3 w = dir * dir;
         float d = level - float(pooled);
         vec4 x = dir.x >= 0.0 ? textureLod(aniso[0], uvw, d) : textureLod(aniso[1], uvw, d);
         vec4 y = dir.y >= 0.0 ? textureLod(aniso[2], uvw, d) : textureLod(aniso[3], uvw, d);
         vec4 z = dir.z >= 0.0 ? textureLod(aniso[4], uvw, d) : textureLod(aniso[5], uvw, d);
-        return (x * w.x + y * w.y + z * w.z) / max(w.x + w.y + w.z, 1e-12);
+        return axis_blend(x, y, z, dir);
     }
     int l = int(floor(level));
     float f = level - float(l);
@@ -118,11 +123,6 @@ vec4 dense_along(sampler3D v, vec3 uvw, int axis, int d, float side) {
 vec3 shifted(vec3 p, int axis, float by, vec3 inv_pool) {
     p[axis] += by;
     return p * inv_pool;
-}
-
-vec4 axis_blend(vec4 x, vec4 y, vec4 z, vec3 dir) {
-    vec3 w = dir * dir;
-    return (x * w.x + y * w.y + z * w.z) / max(w.x + w.y + w.z, 1e-12);
 }
 
 // Two-tap: the directional volumes at integer level l, blended by the squared components of
