@@ -5,7 +5,7 @@
 #   tools/gpu-report.sh [--bundle DIR] [--only GROUPS] OUT_DIR
 #
 # GROUPS (comma-separated; default all): info, tests, bench, model, layouts, techniques,
-# reflections, serial, raster, sweep, accuracy, curves.
+# reflections, serial, raster, sweep, accuracy, cones, curves.
 # Runs into an existing OUT_DIR add to it (steps.tsv appends), so a report can be split across
 # several shorter sessions on the GPU machine; README.md is rewritten from all of OUT_DIR.
 #
@@ -36,6 +36,11 @@
 #                          ${res[0]}^3) with render.depth_prepass forced on and off
 #   accuracy-sponza/       Dabrovic's Sponza at 128^3, 256^3 and 512^3, dense and bricks, against a
 #                          4096-spp reference, whole image and by region (compare --scene --ref-direct)
+#   cones-{cornell,sponza}/ the cone set and the cone filter (issue 43): 9 and 16 cones, trilinear
+#                          and two-tap, 128^3 and 256^3, against a 4096-spp reference at 480x270,
+#                          whole image (sweep-*: timed, one frontier per filter) and by region
+#                          (v*-c*-*.json: compare --scene --ref-direct --test-indirect);
+#                          bench-cones-sponza-*: each of the four at 1920x1080, sync, 128^3
 #   curves/                per-pass cost against voxel resolution, pixels and triangles, with
 #                          fitted exponents (tools/cost-curves.py; curves.md is the table)
 #   steps.tsv, report.log  each step's exit status and seconds; README.md summarises
@@ -67,8 +72,8 @@ if [ $# -ne 1 ]; then
 fi
 for g in ${only//,/ }; do
   case "$g" in
-    info | tests | bench | model | layouts | techniques | reflections | serial | raster | sweep | accuracy | curves) ;;
-    *) echo "gpu-report: unknown group '$g' (info, tests, bench, model, layouts, techniques, reflections, serial, raster, sweep, accuracy, curves)" >&2; exit 2 ;;
+    info | tests | bench | model | layouts | techniques | reflections | serial | raster | sweep | accuracy | cones | curves) ;;
+    *) echo "gpu-report: unknown group '$g' (info, tests, bench, model, layouts, techniques, reflections, serial, raster, sweep, accuracy, cones, curves)" >&2; exit 2 ;;
   esac
 done
 # want GROUP: whether this run measures GROUP.
@@ -325,6 +330,49 @@ if want accuracy; then
       step "accuracy-compare-$tag" 120 "$bin/dvsgi" compare "$a/$tag.exr" "$a/reference.exr" --scene scenes/sponza.toml \
         --ref-direct "$a/direct.exr" --json "$a/$tag.json" >>"$a/$tag.txt" 2>&1
       rm -f "$a/$tag.exr"
+    done
+  done
+fi
+
+# ----- 5c. The cone set and the cone filter (issue 43): what 16 cones and two taps buy, and cost. -----
+if [ "$quick" = 1 ]; then
+  cone_size=(--width 32 --height 18) cone_spp=16 cone_res=(16 32) cone_bench=(--width 64 --height 36 --frames 2 --warmup 1)
+else
+  cone_size=(--width 480 --height 270) cone_spp=4096 cone_res=(128 256) cone_bench=(--width 1920 --height 1080 --frames 30 --warmup 3)
+fi
+if want cones; then
+  for scene in cornell-box sponza; do
+    c="$out/cones-$scene"
+    mkdir -p "$c"
+    step "cones-$scene-reference" 300 "$bin/dvsgi" reference "scenes/$scene.toml" "${cone_size[@]}" --spp "$cone_spp" \
+      --out "$c/reference.exr" >"$c/reference.txt" 2>&1
+    step "cones-$scene-direct" 120 "$bin/dvsgi" reference "scenes/$scene.toml" "${cone_size[@]}" --spp 1024 \
+      --bounces 0 --out "$c/direct.exr" >>"$c/reference.txt" 2>&1
+    for filter in trilinear two-tap; do
+      # Timed, one frontier per filter (the filter is a --set, not a sweep knob).
+      step "cones-$scene-sweep-$filter" 300 "$bin/dvsgi" sweep "scenes/$scene.toml" --out "$c/sweep-$filter" \
+        --set "gi.cone_filter=\"$filter\"" --grid "voxel_resolution=$(IFS=,; echo "${cone_res[*]}")" \
+        --grid diffuse_cones=9,16 --spp "$cone_spp" "${cone_size[@]}" --frames 10 >"$c/sweep-$filter.txt" 2>&1
+      for v in "${cone_res[@]}"; do
+        for n in 9 16; do
+          tag="v$v-c$n-$filter" set=(--set "gi.voxel_resolution=$v" --set "gi.diffuse_cones=$n" --set "gi.cone_filter=\"$filter\"")
+          step "cones-$scene-$tag" 300 bash -c '"$@" --out "$0.exr" && "$@" --view indirect --out "$0-indirect.exr"' \
+            "$c/$tag" "$bin/dvsgi" render "scenes/$scene.toml" "${cone_size[@]}" --schedule sync --frames 8 "${set[@]}" \
+            >"$c/$tag.txt" 2>&1
+          step "cones-$scene-compare-$tag" 120 "$bin/dvsgi" compare "$c/$tag.exr" "$c/reference.exr" --scene "scenes/$scene.toml" \
+            "${set[@]}" --ref-direct "$c/direct.exr" --test-indirect "$c/$tag-indirect.exr" --json "$c/$tag.json" >>"$c/$tag.txt" 2>&1
+          rm -f "$c/$tag.exr" "$c/$tag-indirect.exr"
+        done
+      done
+    done
+    rm -f "$c/reference.var.exr" "$c/direct.var.exr"
+  done
+  for filter in trilinear two-tap; do
+    for n in 9 16; do
+      tag="cones-sponza-c$n-$filter"
+      step "bench-$tag" 300 "$bin/bench" --scene scenes/sponza.toml --modes sync "${cone_bench[@]}" \
+        --set "gi.voxel_resolution=${cone_res[0]}" --set "gi.diffuse_cones=$n" --set "gi.cone_filter=\"$filter\"" \
+        --json "$out/bench-$tag.json" >"$out/bench-$tag.txt" 2>&1
     done
   done
 fi

@@ -15,15 +15,16 @@ pub enum Preset {
 impl Preset {
     /// The `[gi]` overrides, as (dotted key, TOML value).
     pub fn overrides(self) -> Vec<(String, String)> {
-        // (voxels, cones, bounces, downsample): points on the FLIP fronts of both the Cornell
-        // box and Sponza on lavapipe after issue 16 (ACCURACY.md); `ultra` is the scene-file
-        // default (on Sponza's front). Step 0.5, automatic apertures, AO off, and the bounce
-        // gathered by one in 4 static voxels per update everywhere.
+        // (voxels, cones, bounces, downsample): points on the FLIP fronts of the Cornell box
+        // and Sponza on lavapipe, re-measured with 16 cones (issue 43, ACCURACY.md "Presets");
+        // `ultra` is the scene-file default (on the Cornell box's front). Step 0.5, automatic
+        // apertures, AO off, and the bounce gathered by one in 4 static voxels per update
+        // everywhere.
         let (voxels, cones, bounces, downsample) = match self {
             Preset::Low => ("32", "4", "1", "2"),
             Preset::Medium => ("64", "9", "1", "2"),
-            Preset::High => ("128", "9", "1", "2"),
-            Preset::Ultra => ("128", "9", "1", "1"),
+            Preset::High => ("64", "16", "1", "2"),
+            Preset::Ultra => ("128", "16", "1", "1"),
         };
         let values: [(&str, &str); 8] = [
             ("voxel_resolution", voxels),

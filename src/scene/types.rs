@@ -701,7 +701,7 @@ impl Default for GiSettings {
             bounces: 1,
             bounce_feedback: true,
             first_update_bounces: 4,
-            diffuse_cones: 9,
+            diffuse_cones: 16,
             bounce_cones: 0,
             bounce_interleave: 4,
             diffuse_rays: 0,
