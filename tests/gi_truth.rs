@@ -681,9 +681,9 @@ fn open_corner_room() -> Scene {
 /// 1.02-1.17 at 32^3, 0.98-1.10 at 64^3, 0.95-1.07 at 128^3. The lit wall converges (1.165,
 /// 1.102, 1.069); the others drift by about -3% per doubling, which is the light bounced more
 /// than once (the light bounced once holds its level: 1.047, 1.040, 1.031 of the reference's
-/// over the image), so the errors of the north and east walls
-/// grow from 0.011 and 0.024 at 64^3 to 0.046 and 0.055 at 128^3. The issue's "does not
-/// grow" is not met there; the 0.05 bound catches growth like Sponza's (ACCURACY.md).
+/// over the image). So the errors of the north and east walls grow from 0.011 and 0.024 at
+/// 64^3 to 0.046 and 0.055 at 128^3: the issue's "does not grow" is not met there, and the
+/// 0.05 bound only catches growth like Sponza's (ACCURACY.md).
 #[test]
 fn indirect_light_converges_as_voxels_shrink() {
     let ctx = context();
