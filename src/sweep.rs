@@ -226,12 +226,12 @@ pub struct Grid {
 
 impl Grid {
     /// The grid used when no `--grid` is given: 3 x 3 x 2 x 2 x 3 x 2 = 216 configurations
-    /// (AO stays as the scene sets it).
+    /// (AO stays as the scene sets it). The cone counts take in the default, 16 (issue 43).
     pub fn default_grid() -> Grid {
         Grid {
             axes: vec![
                 (Param::VoxelResolution, vec![32.0, 64.0, 128.0]),
-                (Param::DiffuseCones, vec![4.0, 6.0, 9.0]),
+                (Param::DiffuseCones, vec![4.0, 9.0, 16.0]),
                 (Param::DiffuseConeAngle, vec![0.0, 45.0]),
                 (Param::Step, vec![0.5, 1.0]),
                 (Param::Bounces, vec![0.0, 1.0, 2.0]),
