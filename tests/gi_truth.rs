@@ -156,9 +156,9 @@ fn an_open_corner_is_not_darkened_by_ambient_occlusion() {
     let want = sum(&truth, 3);
     let (got, got_ao) = (sum(&default.radiance, 4) / want, sum(&with_ao.radiance, 4) / want);
     eprintln!("indirect light near the seam: {got:.3} of the reference's; with gi.ao = true {got_ao:.3}");
-    // Not darkened. It is too bright instead (1.9 here with 16 cones, 2.0 with 9; 1.3-1.4 away from the seam): cones
-    // whose footprint grazes a lit surface see it as opaque (ACCURACY.md, "What the tracer
-    // cannot do"); the upper bound only catches gross errors.
+    // Not darkened. It is too bright instead (1.9 here with 16 cones, 2.0 with 9; 1.3-1.4
+    // away from the seam): cones whose footprint grazes a lit surface see it as opaque
+    // (ACCURACY.md, "What the tracer cannot do"); the upper bound only catches gross errors.
     assert!((0.75..=2.5).contains(&got), "near the seam the indirect light is {got:.3} of the reference's");
     assert!(got_ao < 0.5 * got, "AO should darken the seam when asked for: {got_ao:.3} vs {got:.3}");
 }
