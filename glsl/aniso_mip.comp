@@ -22,9 +22,11 @@ layout(constant_id = 1) const int SRC_POOL = 0;
 layout(constant_id = 2) const int DST_POOL = 0;
 // gi.cone_filter = "two-tap": texels hold opacity rather than optical depth.
 layout(constant_id = 3) const bool TWO_TAP = false;
+// gi.opacity = "layers": an opaque texel holds optical depth LAYER_TAU (voxel.glsl).
+layout(constant_id = 4) const bool LAYERS = false;
 
 vec4 stored(vec4 premultiplied) {
-    return TWO_TAP ? premultiplied : tau_from_alpha(premultiplied);
+    return TWO_TAP ? premultiplied : tau_from_alpha(premultiplied, LAYERS ? LAYER_TAU : VOXEL_TAU);
 }
 
 vec4 premultiplied(vec4 texel) {

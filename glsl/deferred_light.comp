@@ -3,13 +3,15 @@
 // BRDF * irradiance * cos * shadow visibility (shadow maps, or traced shadow cones or rays), plus
 // with GI the indirect light: (albedo * diffuse-cone mean radiance + Ks * specular-cone
 // radiance) * AO, or with ray-traced reflections albedo * diffuse * AO + Ks * reflections.
-// Output: linear radiance W/(sr m^2), or a debug view of the indirect light.
+// Where no surface is, the sky. Output: linear radiance W/(sr m^2), or a debug view of the
+// indirect light.
 #include "common.glsl"
 #include "brdf.glsl"
 #include "lights.glsl"
 #define SHADOW_VIEWS_BINDING 2
 #include "shadow.glsl"
 #include "gbuffer_read.glsl"
+#include "sky.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -36,6 +38,7 @@ layout(set = 0, binding = 9, rgba32f) uniform writeonly image2D out_radiance;
 layout(set = 0, binding = 10, rgba16f) uniform readonly image2D gi_diffuse;
 layout(set = 0, binding = 11, rgba16f) uniform readonly image2D gi_specular;
 layout(set = 0, binding = 12, rgba8) uniform readonly image2D gi_shadow;
+layout(set = 0, binding = 13) uniform sampler2D sky_map;
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -44,7 +47,11 @@ void main() {
 
     float depth = texelFetch(g_depth, px, 0).r;
     if (depth >= 1.0) {
-        imageStore(out_radiance, px, vec4(0.0, 0.0, 0.0, 1.0));  // background: black (AO view too)
+        // Background: the sky along the pixel's ray from the near plane to the far one, as the
+        // path tracer's camera rays go (black without a sky, and in the indirect and AO views).
+        vec3 d = normalize(world_position(frame, px, 1.0) - world_position(frame, px, 0.0));
+        vec3 sky = OUTPUT == 0u ? sky_radiance(sky_map, frame.sky, d) : vec3(0.0);
+        imageStore(out_radiance, px, vec4(sky, 1.0));
         return;
     }
     vec3 P = world_position(frame, px, depth);

@@ -34,6 +34,9 @@ layout(set = 0, binding = 11, rgba8) uniform writeonly image2D out_shadow;
 layout(set = 0, binding = 12, r32ui) uniform readonly uimage3D brick_maps[4];
 layout(set = 0, binding = 13) uniform texture3D aniso_pool[18];
 layout(set = 0, binding = 14) uniform sampler pool_sampler;
+layout(set = 0, binding = 15) uniform sampler2D sky_cones;
+layout(set = 0, binding = 16) uniform sampler2D sky_irradiance;
+#define CONE_SKY
 #include "cone.glsl"
 
 // Half aperture of the specular cone for Blinn-Phong exponent n: the cone holding half the
@@ -52,16 +55,17 @@ float next_random(inout uint state) {
 }
 
 // Radiance of the first occupied voxel along a ray from g (voxel units) through the
-// full-resolution volume; black when the ray leaves the grid.
+// full-resolution volume; the sky (its sharpest cone level) when the ray leaves the grid.
 vec3 first_voxel_radiance(vec3 g, vec3 d) {
     int res = int(grid.dims.x);
     VoxelWalk w = voxel_walk(g, d);
-    if (any(lessThan(w.c, ivec3(0))) || any(greaterThanEqual(w.c, ivec3(res)))) return vec3(0.0);
+    vec3 sky = sky_cone(sky_cones, frame.sky, d, 0.0) * grid.params.y;
+    if (any(lessThan(w.c, ivec3(0))) || any(greaterThanEqual(w.c, ivec3(res)))) return sky;
     for (int i = 0; i < 3 * 512; ++i) {
         ivec3 t = radiance_texel(w.c);
         vec4 v = t.x < 0 ? vec4(0.0) : texelFetch(vox_lod0, t, 0);
         if (v.a > 0.0) return v.rgb;
-        if (!voxel_walk_step(w, res)) break;
+        if (!voxel_walk_step(w, res)) return sky;
     }
     return vec3(0.0);
 }
@@ -120,7 +124,9 @@ void main() {
         if (max(ks.r, max(ks.g, ks.b)) > 0.0) {
             vec3 V = safe_normalize(frame.camera_pos.xyz - P, N);
             vec3 R = reflect(-V, N);
-            spec = trace_cone(o, R, specular_tan_half(ns.a), 1e30).radiance;
+            float tan_half = specular_tan_half(ns.a);
+            ConeResult c = trace_cone(o, R, tan_half, 1e30);
+            spec = min(c.radiance + cone_sky(c, R, tan_half), vec3(HALF_MAX));
         }
         imageStore(out_specular, lo, vec4(spec, 1.0));
     }

@@ -3,7 +3,10 @@
 // Reference path tracer (the ground truth for the accuracy sweep). Unbiased for dvsgi's scene
 // model: two-sided triangles, Lambert albedo/pi + energy-normalised Blinn-Phong (brdf.glsl),
 // two-sided Lambertian emission, and directional/point/spot lights (lights.glsl) sampled by
-// next-event estimation. Emissive surfaces are found by the paths themselves. Paths end by
+// next-event estimation. Emissive surfaces are found by the paths themselves. The sky
+// (sky.glsl) is what rays that leave the scene see; each surface also draws one direction from
+// the sky's tables (luminance x sin theta, render::sky) and weighs it against the BRDF's own
+// direction by multiple importance sampling (the power heuristic). Paths end by
 // Russian roulette; `size.w` caps the number of indirect bounces (0 = direct light only).
 // Each invocation traces `pc.samples` paths (the host sends 1 and dispatches again: see
 // reference::TracePass) through one pixel (through its centre, as the
@@ -15,6 +18,7 @@
 #include "lights.glsl"
 #include "scene.glsl"
 #include "material.glsl"
+#include "sky.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -27,6 +31,8 @@ struct PtParams {
     uvec4 size;   // x width, y height, z light count, w max indirect bounces
     uvec4 info;   // x seed, y 1: jitter over the pixel (box filter), 0: through its centre,
                   // z triangle count, w 1: specular lobes at the first surface only
+    vec4 sky;     // sky.glsl's parameters; w 1 when the sampling tables hold light
+    uvec4 sky_size;  // x, y the sky map's width and height
 };
 
 struct BvhNode {
@@ -58,6 +64,10 @@ layout(set = 0, binding = 6) uniform texture2D textures[TEXTURE_COUNT];
 layout(set = 0, binding = 9) uniform sampler texture_sampler;
 layout(set = 0, binding = 7, rgba32f) uniform image2D accum;     // rgb sum, a accepted samples
 layout(set = 0, binding = 8, rgba32f) uniform image2D accum_sq;  // rgb sum of squares, a rejected samples
+// render::sky::SkySampling: the row CDF (h + 1), each row's texel CDF (h rows of w + 1), each
+// texel's density per unit of image area (w h).
+layout(set = 0, binding = 10, std430) readonly buffer SkyTables { float sky_table[]; };
+layout(set = 0, binding = 11) uniform sampler2D sky_map;
 
 layout(push_constant) uniform Push {
     uint first_sample;
@@ -298,15 +308,105 @@ float mean3(vec3 c) {
     return (c.r + c.g + c.b) * (1.0 / 3.0);
 }
 
+// The sky map's texel along d: the nearest, as the sampling tables were made from texels.
+ivec2 sky_texel(vec3 d) {
+    ivec2 size = ivec2(params.sky_size.xy);
+    return min(ivec2(sky_uv(d, params.sky.xy) * vec2(size)), size - 1);
+}
+
+vec3 sky_at(vec3 d) {
+    return has_sky(params.sky) ? texelFetch(sky_map, sky_texel(d), 0).rgb : vec3(0.0);
+}
+
+bool sky_sampled() {
+    return params.sky.w > 0.5;
+}
+
+// The density per solid angle of a texel of image density `density` at polar angle sin_theta.
+float sky_solid_angle_pdf(float density, float sin_theta) {
+    return sin_theta > 0.0 ? density / (2.0 * PI * PI * sin_theta) : 0.0;
+}
+
+float sky_density(uvec2 texel) {
+    uint w = params.sky_size.x, h = params.sky_size.y;
+    return sky_table[(h + 1u) + h * (w + 1u) + texel.y * w + texel.x];
+}
+
+// Density per solid angle of drawing d from the sky's tables.
+float sky_pdf(vec3 d) {
+    return sky_solid_angle_pdf(sky_density(uvec2(sky_texel(d))), sqrt(max(0.0, 1.0 - d.y * d.y)));
+}
+
+// The entry i of the n + 1 cumulative values from `base` with cdf[i] <= x < cdf[i + 1].
+uint cdf_find(uint base, uint n, float x) {
+    uint lo = 0u, hi = n;
+    while (hi - lo > 1u) {
+        uint mid = (lo + hi) / 2u;
+        if (sky_table[base + mid] <= x) lo = mid;
+        else hi = mid;
+    }
+    return lo;
+}
+
+// A direction drawn from the sky's tables (a row, then a texel in it, uniform within the
+// texel) and its density per solid angle.
+vec3 sample_sky(float u1, float u2, out float pdf) {
+    uint w = params.sky_size.x, h = params.sky_size.y;
+    uint row = cdf_find(0u, h, u1);
+    float fv = (u1 - sky_table[row]) / max(sky_table[row + 1u] - sky_table[row], 1e-30);
+    uint base = (h + 1u) + row * (w + 1u);
+    uint col = cdf_find(base, w, u2);
+    float fu = (u2 - sky_table[base + col]) / max(sky_table[base + col + 1u] - sky_table[base + col], 1e-30);
+    vec2 uv = (vec2(col, row) + clamp(vec2(fu, fv), 0.0, 0.99999)) / vec2(w, h);
+    pdf = sky_solid_angle_pdf(sky_density(uvec2(col, row)), sin(PI * uv.y));
+    return sky_dir(uv, params.sky.xy);
+}
+
+// The power heuristic's weight of a strategy of density a against one of density b.
+float mis_weight(float a, float b) {
+    return a * a / max(a * a + b * b, 1e-30);
+}
+
+// Density (per solid angle) of the path's continuation drawing wi at surface s: the diffuse
+// lobe or the specular one, the latter with probability p_spec.
+float lobe_pdf(Surface s, vec3 V, vec3 wi, float p_spec) {
+    float cos_i = dot(s.ns, wi);
+    if (cos_i <= 0.0) return 0.0;
+    return (1.0 - p_spec) * cos_i * INV_PI + p_spec * specular_pdf(s.ns, V, wi, s.shininess);
+}
+
+// One direction drawn from the sky towards surface s, shadowed: its contribution, weighed
+// against the continuation's density where the path continues (`continues`).
+vec3 sky_light(Surface s, vec3 V, vec3 origin, float p_spec, bool continues, inout uint rng) {
+    float u1 = rand(rng), u2 = rand(rng);
+    float pdf;
+    vec3 wi = sample_sky(u1, u2, pdf);
+    float cos_theta = dot(s.ns, wi);
+    if (!(pdf > 0.0) || cos_theta <= 0.0 || dot(s.ng, wi) <= 0.0) return vec3(0.0);
+    Hit blocker;
+    if (trace(origin, wi, T_FAR, true, blocker)) return vec3(0.0);
+    float w = continues ? mis_weight(pdf, lobe_pdf(s, V, wi, p_spec)) : 1.0;
+    vec3 f = brdf_diffuse(s.albedo) + brdf_specular(s.ks, s.shininess, s.ns, V, wi);
+    return f * sky_at(wi) * cos_theta * (w / pdf);
+}
+
 vec3 radiance(vec3 o, vec3 d, float t_max, inout uint rng) {
     vec3 L = vec3(0.0);
     vec3 beta = vec3(1.0);
     uint max_bounces = params.size.w;
     uint light_count = params.size.z;
     float eps0 = params.camera.w;
+    // The density the last continuation drew d with (0: the camera's ray, which no other
+    // strategy finds).
+    float last_pdf = 0.0;
     for (uint depth = 0u; depth < 1024u; ++depth) {
         Hit h;
-        if (!trace(o, d, t_max, false, h)) break;
+        if (!trace(o, d, t_max, false, h)) {
+            // Left the scene: the sky, weighed against drawing d from the sky's tables.
+            float w = last_pdf > 0.0 && sky_sampled() ? mis_weight(last_pdf, sky_pdf(d)) : 1.0;
+            L += beta * sky_at(d) * w;
+            break;
+        }
         Surface s = surface_at(h, o, d);
         // `reference --specular first`: later surfaces are Lambertian (voxel cone tracing's
         // transport, without caustics or glossy interreflection).
@@ -330,13 +430,14 @@ vec3 radiance(vec3 o, vec3 d, float t_max, inout uint rng) {
             vec3 f = brdf_diffuse(s.albedo) + brdf_specular(s.ks, s.shininess, s.ns, V, ls.wi);
             L += beta * f * ls.irradiance * cos_theta;
         }
-        if (depth >= max_bounces) break;
         // Continue the path: pick the diffuse or the specular lobe, evaluate the whole BRDF
         // over the mixture density (unbiased for any choice probability).
         float wd = mean3(s.albedo);
         float ws = mean3(s.ks);
-        if (wd + ws <= 0.0) break;
-        float p_spec = ws / (wd + ws);
+        bool continues = depth < max_bounces && wd + ws > 0.0;
+        float p_spec = wd + ws > 0.0 ? ws / (wd + ws) : 0.0;
+        if (sky_sampled()) L += beta * sky_light(s, V, origin, p_spec, continues, rng);
+        if (!continues) break;
         mat3 tbn = frame_of(s.ns);
         vec3 wi;
         float u1 = rand(rng), u2 = rand(rng);
@@ -353,8 +454,9 @@ vec3 radiance(vec3 o, vec3 d, float t_max, inout uint rng) {
         }
         float cos_i = dot(s.ns, wi);
         if (cos_i <= 0.0 || dot(s.ng, wi) <= 0.0) break;
-        float pdf = (1.0 - p_spec) * cos_i * INV_PI + p_spec * specular_pdf(s.ns, V, wi, s.shininess);
+        float pdf = lobe_pdf(s, V, wi, p_spec);
         if (!(pdf > 0.0)) break;
+        last_pdf = pdf;
         vec3 f = brdf_diffuse(s.albedo) + brdf_specular(s.ks, s.shininess, s.ns, V, wi);
         beta *= f * cos_i / pdf;
         if (depth >= 2u) {

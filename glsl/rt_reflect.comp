@@ -7,7 +7,7 @@
 //   glossy surfaces: gi.specular_rays rays from the Blinn-Phong half-vector distribution.
 // Each ray's hit leaves with its emission, the lights through shadow rays (brdf.glsl's BRDF,
 // as the path tracer), and the voxels' diffuse indirect light (the diffuse cones at the hit).
-// A ray that leaves the scene sees black, the renderer's background.
+// A ray that leaves the scene sees the sky (black without one), the renderer's background.
 // Temporal accumulation: each frame draws new directions (the seed takes the frame number,
 // frame.voxel.w) and averages them with the history of the frame.voxel.z frames before it that
 // saw the same view and scene (0: none, the history starts again); the renderer caps that count
@@ -53,6 +53,10 @@ layout(set = 0, binding = 21) uniform sampler texture_sampler;
 layout(set = 0, binding = 22) uniform sampler3D vox_direct;  // the voxels' direct radiance
 // The reflections averaged over the frames the view and the scene stood still (unscaled).
 layout(set = 0, binding = 23, rgba32f) uniform image2D history;
+layout(set = 0, binding = 24) uniform sampler2D sky_cones;
+layout(set = 0, binding = 25) uniform sampler2D sky_irradiance;
+layout(set = 0, binding = 26) uniform sampler2D sky_map;
+#define CONE_SKY
 #include "cone.glsl"
 #include "ray_query.glsl"
 
@@ -106,7 +110,7 @@ vec3 shade_hit(HitSurface s, vec3 d) {
 
 vec3 ray_radiance(vec3 o, vec3 d) {
     RayHit h;
-    if (!trace_closest(o, d, 1e30, h)) return vec3(0.0);
+    if (!trace_closest(o, d, 1e30, h)) return sky_radiance(sky_map, frame.sky, d);
     return shade_hit(hit_surface(h, o, d), d);
 }
 

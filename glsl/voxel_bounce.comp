@@ -3,7 +3,8 @@
 // voxel_list.glsl) trace the diffuse cones over their normal's hemisphere through the current
 // radiance (full-resolution volume + directional mips) and store the light they reflect:
 //   L_indirect = albedo/pi * E,   E = pi * sum_i w_i L_i   =>   L_indirect = albedo * sum_i w_i L_i
-// voxel_bounce_compose.comp then adds it to the direct radiance. With an interleave N > 1
+// voxel_bounce_compose.comp then adds it to the direct radiance. Cones that leave the scene
+// gather the sky (cone.glsl), so the voxels hold sky light and it bounces. With an interleave N > 1
 // (frame.voxel.y) only one in N workgroups of static voxels gathers this update, in turn;
 // the others keep the indirect light of their last gather. Dynamic voxels, new at every
 // revoxelization, gather every update.
@@ -27,6 +28,9 @@ layout(set = 0, binding = 7, rgba16f) uniform writeonly image3D vox_indirect;
 layout(set = 0, binding = 9, r32ui) uniform readonly uimage3D brick_maps[4];
 layout(set = 0, binding = 10) uniform texture3D aniso_pool[18];
 layout(set = 0, binding = 11) uniform sampler pool_sampler;
+layout(set = 0, binding = 12) uniform sampler2D sky_cones;
+layout(set = 0, binding = 13) uniform sampler2D sky_irradiance;
+#define CONE_SKY
 #include "cone.glsl"
 
 void main() {

@@ -79,6 +79,8 @@ pub enum Param {
     SpecularHistory,
     /// `gi.shadows`, how direct light is shadowed, by name (index in [`SHADOW_KINDS`]).
     Shadows,
+    /// `gi.opacity`, how cone samples follow walls, by name (index in [`OPACITIES`]).
+    Opacity,
 }
 
 /// The `gi.mode` values a sweep can compare, in the order of their index as a knob value.
@@ -96,6 +98,13 @@ pub const HIT_INDIRECT: [&str; 2] = ["cones", "voxel"];
 
 /// The `gi.shadows` values, in the order of their index as a knob value.
 pub const SHADOW_KINDS: [&str; 3] = ["shadow-map", "cone", "rt"];
+
+/// The `gi.opacity` values, in the order of their index as a knob value.
+pub const OPACITIES: [&str; 2] = ["blend", "layers"];
+
+fn blend() -> String {
+    "blend".to_owned()
+}
 
 /// A name's index among a knob's names (NaN if it is not one).
 fn name_index(names: &[&str], name: &str) -> f64 {
@@ -127,7 +136,7 @@ fn vct() -> String {
 }
 
 impl Param {
-    pub const ALL: [Param; 20] = [
+    pub const ALL: [Param; 21] = [
         Param::VoxelResolution,
         Param::DiffuseCones,
         Param::DiffuseConeAngle,
@@ -148,6 +157,7 @@ impl Param {
         Param::RtHitIndirect,
         Param::SpecularHistory,
         Param::Shadows,
+        Param::Opacity,
     ];
     /// The key under `[gi]`.
     pub fn key(self) -> &'static str {
@@ -172,6 +182,7 @@ impl Param {
             Param::RtHitIndirect => "rt_hit_indirect",
             Param::SpecularHistory => "specular_history",
             Param::Shadows => "shadows",
+            Param::Opacity => "opacity",
         }
     }
     /// Short prefix in configuration labels.
@@ -197,6 +208,7 @@ impl Param {
             Param::RtHitIndirect => "hit-",
             Param::SpecularHistory => "sh",
             Param::Shadows => "shadow-",
+            Param::Opacity => "op-",
         }
     }
     /// The names a knob's values are written as, for knobs that take names.
@@ -206,6 +218,7 @@ impl Param {
             Param::Specular => Some(&SPECULAR_SOURCES),
             Param::RtHitIndirect => Some(&HIT_INDIRECT),
             Param::Shadows => Some(&SHADOW_KINDS),
+            Param::Opacity => Some(&OPACITIES),
             _ => None,
         }
     }
@@ -410,6 +423,9 @@ pub struct Row {
     /// `gi.shadows` ("shadow-map" in rows from before it was recorded).
     #[serde(default = "shadow_map")]
     pub shadows: String,
+    /// `gi.opacity` ("blend" in rows from before it was recorded).
+    #[serde(default = "blend")]
+    pub opacity: String,
     /// Median host wall clock of a frame that updates the voxels (relight, mips, bounces)
     /// and traces: the cost when lights or objects move. The front is drawn against this.
     pub frame_ms: f64,
@@ -456,6 +472,7 @@ impl Row {
             rt_hit_indirect: serde_name(s.rt_hit_indirect).unwrap_or_else(voxel),
             specular_history: s.specular_history,
             shadows: s.shadows.name().to_owned(),
+            opacity: serde_name(s.opacity).unwrap_or_else(blend),
             frame_ms: time[0],
             frame_p95_ms: time[1],
             static_frame_ms: time[2],
@@ -545,6 +562,7 @@ impl Row {
             Param::RtHitIndirect => name_index(&HIT_INDIRECT, &self.rt_hit_indirect),
             Param::SpecularHistory => self.specular_history as f64,
             Param::Shadows => name_index(&SHADOW_KINDS, &self.shadows),
+            Param::Opacity => name_index(&OPACITIES, &self.opacity),
         }
     }
 }

@@ -303,6 +303,7 @@ fn object(mesh: usize) -> Object {
 /// A scene of the given triangles (albedo 0.5), a point light above, the camera looking down.
 fn scene_of(tris: &[[Vec3; 3]], normal: Option<Vec3>) -> Scene {
     let mut s = Scene {
+        sky: None,
         path: PathBuf::from("extremes"),
         name: "extremes".into(),
         meshes: vec![],

@@ -31,6 +31,7 @@ fn scene(
     lights: Vec<Light>,
 ) -> Scene {
     Scene {
+        sky: None,
         path: PathBuf::from("maps-test"),
         name: "maps test".into(),
         objects: (0..meshes.len())

@@ -83,6 +83,7 @@ fn textured_square(texture: Texture) -> Scene {
         positions,
     };
     Scene {
+        sky: None,
         path: PathBuf::from("texture-test"),
         name: "texture test".into(),
         meshes: vec![mesh],

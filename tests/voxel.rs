@@ -14,6 +14,7 @@ const RES: u32 = 32;
 /// A scene whose voxel grid is exactly [0, RES]^3 in world units (voxel (i,j,k) = [i,i+1]x...).
 fn scene(objects: Vec<(Mesh, bool, Motion)>) -> Scene {
     let mut s = Scene {
+        sky: None,
         path: PathBuf::from("voxel-test"),
         name: "voxel test".into(),
         meshes: vec![],

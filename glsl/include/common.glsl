@@ -22,6 +22,7 @@ struct FrameData {
                        // z frames in the rt reflections' history (0: none), w the frame's number
     vec4 exposure;     // x 1: "auto" (tonemap.comp adds exposure.comp's EV to shadow.w's), y how far the
                        // shown EV moves to this frame's (1: all the way; the viewer eases it)
+    vec4 sky;          // x cos, y sin of the sky's turn about +y; z 1 with a sky (sky.glsl), w unused
 };
 
 // How far from 1 the length of a unit vector stored in three 16-bit floats can be (each

@@ -8,6 +8,8 @@
 //   layout(r32ui) uniform readonly uimage3D brick_maps[4];
 //   uniform texture3D aniso_pool[18];             (pooled directional levels: 6 per level)
 //   uniform sampler pool_sampler;
+// and, where cones see the sky (`#define CONE_SKY` before including), FrameBlock { FrameData
+// frame; }, uniform sampler2D sky_cones and sky_irradiance (sky.glsl).
 // Positions are in voxel units: 0..res along each axis of the grid.
 #ifndef DVSGI_CONE_GLSL
 #define DVSGI_CONE_GLSL
@@ -15,6 +17,9 @@
 #include "voxel.glsl"
 #include "bricks.glsl"
 #include "cone_params.glsl"
+#ifdef CONE_SKY
+#include "sky.glsl"
+#endif
 
 // Directional volume `face` (literal) of pooled level l (0..2) at normalized pool
 // coordinates q: trilinear within one brick (every face's pool has the same layout).
@@ -26,11 +31,36 @@ vec4 pooled_texel(texture3D pool_image, vec3 q) {
     return textureLod(sampler3D(pool_image, pool_sampler), q, 0.0);
 }
 
+bool layers() {
+    return (gi.counts.w & GI_FLAG_LAYERS) != 0u;
+}
+
+// The optical depth of an occupied full-resolution voxel (voxel.glsl).
+float opaque_tau() {
+    return layers() ? LAYER_TAU : VOXEL_TAU;
+}
+
 // The three directional volumes a cone travelling along `dir` samples (x, y, z: the volume of
-// each axis on the side dir points to), blended by the squared components of dir.
+// each axis on the side dir points to, each (L * tau, tau) per texel along its axis), as one
+// (L * tau, tau) per texel along dir. gi.opacity:
+// * "blend": averaged by the squared components of dir. A wall across axis a crossed at
+//   angle theta from a holds tau_a cos(theta) along the path: oblique cones leak through it.
+// * "layers": tau = |(|d_x| tau_x, |d_y| tau_y, |d_z| tau_z)|. A wall across a is crossed over
+//   1 / |d_a| texels along the path at |d_a| tau_a per texel: its whole optical depth at any
+//   angle; isotropic cover (tau_a all equal) keeps its tau. Each axis's radiance is weighted
+//   by its share of the sum of squares.
 vec4 axis_blend(vec4 x, vec4 y, vec4 z, vec3 dir) {
     vec3 w = dir * dir;
-    return (x * w.x + y * w.y + z * w.z) / max(w.x + w.y + w.z, 1e-12);
+    if (!layers()) return (x * w.x + y * w.y + z * w.z) / max(w.x + w.y + w.z, 1e-12);
+    vec3 tau = max(vec3(x.a, y.a, z.a), vec3(0.0));
+    vec3 share = w * tau * tau;
+    float sum = share.x + share.y + share.z;
+    if (sum <= 0.0) return vec4(0.0);
+    // (L_a tau_a) w_a tau_a = L_a share_a.
+    vec3 weighted = max(x.rgb, vec3(0.0)) * (w.x * tau.x) + max(y.rgb, vec3(0.0)) * (w.y * tau.y)
+                  + max(z.rgb, vec3(0.0)) * (w.z * tau.z);
+    float rate = sqrt(sum);
+    return vec4(weighted / sum * rate, rate);
 }
 
 // The directional volumes at integer level l, blended by the squared components of `dir`.
@@ -101,7 +131,7 @@ AlongTaps along_taps(float at) {
 }
 
 vec4 blend_along(vec4 lower, vec4 upper, float weight) {
-    return mix(tau_from_alpha(lower), tau_from_alpha(upper), weight);
+    return mix(tau_from_alpha(lower, opaque_tau()), tau_from_alpha(upper, opaque_tau()), weight);
 }
 
 // Volume `v` at its level d (`side` texels a side), `axis` its direction's axis, at normalized uvw.
@@ -162,8 +192,10 @@ vec4 two_tap_directional(vec3 uvw, vec3 dir, float level) {
     return f > 0.0 ? mix(a, two_tap_level(uvw, dir, l + 1), f) : a;
 }
 
-// Opacity of an occupied full-resolution voxel: optical depth VOXEL_TAU.
-const float VOXEL_ALPHA = 1.0 - 1.0 / 256.0;
+// Opacity of an occupied full-resolution voxel: optical depth opaque_tau().
+float voxel_alpha() {
+    return layers() ? 1.0 - 1.0 / 65536.0 : 1.0 - 1.0 / 256.0;
+}
 
 // Two-tap: the full-resolution radiance (L, occupancy; premultiplied) as (L * tau, tau): two
 // taps along the axis the cone travels most along, as for the directional volumes. Bricked, both
@@ -186,8 +218,8 @@ vec4 two_tap_full(vec3 uvw, vec3 dir) {
         b += p.xyz - pos;
         scale = 1.0 / vec3(grid.pools[0].xyz * 9u);
     }
-    vec4 lower = textureLod(vox_lod0, a * scale, 0.0) * VOXEL_ALPHA;
-    vec4 upper = textureLod(vox_lod0, b * scale, 0.0) * VOXEL_ALPHA;
+    vec4 lower = textureLod(vox_lod0, a * scale, 0.0) * voxel_alpha();
+    vec4 upper = textureLod(vox_lod0, b * scale, 0.0) * voxel_alpha();
     return blend_along(lower, upper, t.weight);
 }
 
@@ -206,8 +238,8 @@ vec4 sample_voxels(vec3 g, vec3 dir, float lod) {
         return lod <= 0.0 ? full : mix(full, two_tap_directional(uvw, dir, 0.0), lod);
     }
     if (lod >= 1.0) return sample_anisotropic(uvw, dir, lod - 1.0);
-    // Occupied full-resolution voxels (radiance L, alpha 1) have optical depth VOXEL_TAU.
-    vec4 full = sample_full(uvw) * VOXEL_TAU;
+    // Occupied full-resolution voxels (radiance L, alpha 1) have optical depth opaque_tau().
+    vec4 full = sample_full(uvw) * opaque_tau();
     return lod <= 0.0 ? full : mix(full, sample_anisotropic(uvw, dir, 0.0), lod);
 }
 
@@ -221,9 +253,10 @@ vec4 cone_segment(vec4 smp, float depth) {
 }
 
 struct ConeResult {
-    vec3 radiance;    // radiance arriving along the cone (front-to-back composited)
+    vec3 radiance;    // radiance arriving along the cone from the voxels (front-to-back composited)
     float opacity;    // accumulated opacity
     float occlusion;  // opacity weighted by f(r) = 1 / (1 + falloff r), for ambient occlusion
+    float sky;        // the transmittance it leaves the grid with (0 when it ends inside)
 };
 
 // Where a cone starts: a surface point, its unit normal, and how far (in units of |n|_1)
@@ -259,12 +292,16 @@ float clear_texel(ConeOrigin o, float l1, float h) {
 // * Steps are gi.step (beta) times the diameter, i.e. 2 beta texels; optical depth is summed
 //   over each step (voxel.glsl), so nothing leaks through walls between samples.
 // * It ends at max_t, when opaque, or when its filter footprint has left the grid (which is
-//   transparent outside: what lies beyond is not known, and nothing there emits).
+//   transparent outside: nothing there is known to emit).
+// * A cone whose end lies outside the grid has left the scene: `sky` is the transmittance it
+//   has left, through which it sees the sky beyond (cone_sky, trace_diffuse). One that ends
+//   inside (at max_t, or opaque) sees none: where the scene's walls close, no sky gets in.
 ConeResult trace_cone(ConeOrigin o, vec3 dir, float tan_half, float max_t) {
     ConeResult r;
     r.radiance = vec3(0.0);
     r.opacity = 0.0;
     r.occlusion = 0.0;
+    r.sky = 0.0;
     float res = float(grid.dims.x);
     float beta = max(gi.trace.x, 0.01);
     float falloff = gi.trace.w;
@@ -291,22 +328,53 @@ ConeResult trace_cone(ConeOrigin o, vec3 dir, float tan_half, float max_t) {
         }
         t += step_len;
     }
+    vec3 end = g + dir * t;
+    if (any(lessThan(end, vec3(0.0))) || any(greaterThan(end, vec3(res)))) r.sky = 1.0 - r.opacity;
     r.radiance = min(r.radiance, vec3(HALF_MAX));
     return r;
 }
 
+#ifdef CONE_SKY
+// What a cone of half-aperture tangent `tan_half` along `dir` sees of the sky past the voxels
+// (c = trace_cone's result), in the volumes' scaled radiance.
+vec3 cone_sky(ConeResult c, vec3 dir, float tan_half) {
+    if (c.sky <= 0.0) return vec3(0.0);
+    return c.sky * sky_cone(sky_cones, frame.sky, dir, tan_half) * grid.params.y;
+}
+#endif
+
 // Diffuse cones over the hemisphere of the origin's normal: the cosine-weighted
 // mean incoming radiance (irradiance / pi) in rgb and the AO factor (1 = unoccluded) in a.
+// With CONE_SKY the sky seen past the voxels is added: each cone's sky, filtered to its
+// aperture, through the transmittance it left the grid with, and the sum scaled so that with
+// nothing in the way it is the sky's exact irradiance / pi at the normal (sky.glsl): a few
+// cones' weights do not integrate a small bright source (a sun in the image) exactly.
 vec4 trace_diffuse(ConeOrigin o) {
     mat3 tbn = tangent_frame(o.n);
     vec3 sum = vec3(0.0);
     float occlusion = 0.0;
+    vec3 sky_seen = vec3(0.0), sky_open = vec3(0.0);
     for (uint i = 0u; i < gi.counts.x; ++i) {
         vec3 d = normalize(tbn * gi.cones[i].xyz);
         ConeResult c = trace_cone(o, d, gi.cone_tan[i].x, 1e30);
         sum += gi.cones[i].w * c.radiance;
         occlusion += gi.cones[i].w * c.occlusion;
+#ifdef CONE_SKY
+        if (has_sky(frame.sky)) {
+            vec3 sky = gi.cones[i].w * sky_cone(sky_cones, frame.sky, d, gi.cone_tan[i].x);
+            sky_open += sky;
+            sky_seen += c.sky * sky;
+        }
+#endif
     }
+#ifdef CONE_SKY
+    if (has_sky(frame.sky)) {
+        vec3 exact = sky_irradiance_over_pi(sky_irradiance, frame.sky, o.n);
+        vec3 k = vec3(sky_open.r > 0.0 ? exact.r / sky_open.r : 1.0, sky_open.g > 0.0 ? exact.g / sky_open.g : 1.0,
+                      sky_open.b > 0.0 ? exact.b / sky_open.b : 1.0);
+        sum = min(sum + sky_seen * k * grid.params.y, vec3(HALF_MAX));
+    }
+#endif
     return vec4(sum, clamp(1.0 - occlusion, 0.0, 1.0));
 }
 

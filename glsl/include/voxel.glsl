@@ -25,14 +25,16 @@ struct VoxelGrid {
 //   surface covers in part comes out nearly opaque.
 // * "two-tap": premultiplied (c, alpha). Each cone sample filters opacity across the axis and
 //   blends optical depth along it, each where it belongs.
-// An occupied full-resolution voxel is opaque: optical depth VOXEL_TAU (transmittance 1/256).
+// An occupied full-resolution voxel is opaque: optical depth VOXEL_TAU (transmittance 1/256),
+// or with gi.opacity = "layers" LAYER_TAU (1/65536), which is also the most any texel holds.
 const float VOXEL_TAU = 5.545177;  // ln(256)
+const float LAYER_TAU = 11.090355;  // ln(65536)
 
-// Premultiplied (c, alpha) -> (L * tau, tau), and back.
-vec4 tau_from_alpha(vec4 premultiplied) {
+// Premultiplied (c, alpha) -> (L * tau, tau), tau at most `opaque`, and back.
+vec4 tau_from_alpha(vec4 premultiplied, float opaque) {
     float a = clamp(premultiplied.a, 0.0, 1.0);
     if (a <= 0.0) return vec4(0.0);
-    float tau = min(-log(max(1.0 - a, 1e-30)), VOXEL_TAU);
+    float tau = min(-log(max(1.0 - a, 1e-30)), opaque);
     return vec4(max(premultiplied.rgb, vec3(0.0)) / a * tau, tau);
 }
 

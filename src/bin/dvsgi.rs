@@ -771,6 +771,9 @@ fn print_scene(common: &CommonArgs, ctx: &std::sync::Arc<Context>, scene: dvsgi:
         Ok(t) => t.lines().for_each(|l| outln!("    {l}")),
         Err(e) => outln!("    (cannot show: {e})"),
     }
+    if let Some(sky) = dvsgi::render::sky::sky_use(&scene) {
+        outln!("  {sky}");
+    }
     let mut scene = scene;
     let layout = dvsgi::render::budget::resolve_layout(&scene, &dvsgi::render::budget::Limits::of(ctx));
     if scene.settings.gi.voxel_layout != layout && scene.settings.gi.mode == dvsgi::scene::GiMode::Vct {

@@ -15,6 +15,7 @@ use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::Pass;
 use crate::render::passes::readback::{HostReadPass, ImageDownload};
 use crate::render::scene_gpu::{upload_buffer, MaterialTable};
+use crate::render::sky::{SkyGpu, SkyParams};
 use crate::render::{lights, Mode, Scheduler};
 use crate::scene::{Aabb, Scene};
 use ash::vk;
@@ -138,6 +139,9 @@ struct PtParams {
     camera: [f32; 4],
     size: [u32; 4],
     info: [u32; 4],
+    /// render::sky::SkyParams.
+    sky: [f32; 4],
+    sky_size: [u32; 4],
 }
 
 /// Mirrors `Tri` in glsl/pt_trace.comp.
@@ -233,7 +237,7 @@ impl TracePass {
     /// image of `size` pixels.
     fn new(
         ctx: &Arc<Context>,
-        materials: &MaterialTable,
+        (materials, sky): (&MaterialTable, &SkyGpu),
         uniform: Arc<Buffer>,
         scene: SceneBuffers,
         size: [u32; 2],
@@ -253,6 +257,8 @@ impl TracePass {
             .storage_image(&accum, write)
             .storage_image(&accum_sq, write)
             .sampler(materials.lod_sampler.raw)
+            .loaded(Bind::Storage(&sky.sampling))
+            .extend(sky.map_bind())
             .build(ctx, "path trace", vk::ShaderStageFlags::COMPUTE)?;
         let pipeline = Pipeline::compute(
             ctx,
@@ -340,7 +346,7 @@ impl SceneBuffers {
 fn trace_params(
     scene: &Scene,
     options: &ReferenceOptions,
-    bounds: Aabb,
+    (bounds, sky): (Aabb, SkyParams),
     light_count: u32,
     triangle_count: u32,
 ) -> PtParams {
@@ -359,6 +365,8 @@ fn trace_params(
             triangle_count,
             (options.specular == SpecularPaths::FirstSurface) as u32,
         ],
+        sky: sky.params,
+        sky_size: sky.size,
     }
 }
 
@@ -366,8 +374,9 @@ fn trace_params(
 pub struct PathTracer {
     ctx: Arc<Context>,
     pass: TracePass,
-    // Keeps the material table and textures the descriptor set points at alive.
+    // Keep the material table, the textures and the sky the descriptor set points at alive.
     _materials: MaterialTable,
+    _sky: SkyGpu,
     scheduler: Scheduler,
     options: ReferenceOptions,
     done: u32,
@@ -402,13 +411,16 @@ impl PathTracer {
         let bounds = scene.world_bounds(s.time);
         let buffers = SceneBuffers::upload(ctx, scene, &tris, &bvh, bounds)?;
         let materials = MaterialTable::new(ctx, scene)?;
-        let params = trace_params(scene, &options, bounds, buffers.light_count, tris.corners.len() as u32);
+        let sky = SkyGpu::new(ctx, scene.sky.as_ref())?;
+        let params =
+            trace_params(scene, &options, (bounds, sky.params), buffers.light_count, tris.corners.len() as u32);
         let uniform = Arc::new(Buffer::uniform(ctx, "reference parameters", &params)?);
-        let pass = TracePass::new(ctx, &materials, uniform, buffers, [width, height])?;
+        let pass = TracePass::new(ctx, (&materials, &sky), uniform, buffers, [width, height])?;
         Ok(PathTracer {
             ctx: ctx.clone(),
             pass,
             _materials: materials,
+            _sky: sky,
             scheduler: Scheduler::new(ctx, Mode::Sync, 1)?,
             options,
             done: 0,

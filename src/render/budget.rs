@@ -110,8 +110,9 @@ impl Estimate {
         let uploads = super::relief::ReliefPlan::of(scene).uploads;
         let texels: u64 =
             uploads.iter().map(|u| &scene.textures[u.texture as usize]).map(|t| t.width as u64 * t.height as u64).sum();
-        // position + normal + uv (32 B) per vertex, 4 B per index, RGBA8 textures with mips (4/3).
-        e.scene = 32 * vertices + 4 * indices + texels * 16 / 3;
+        // position + normal + uv (32 B) per vertex, 4 B per index, RGBA8 textures with mips (4/3),
+        // the sky's maps and tables.
+        e.scene = 32 * vertices + 4 * indices + texels * 16 / 3 + super::sky::sky_bytes(scene.sky.as_ref());
         e
     }
 

@@ -6,7 +6,7 @@
 //! `E = pi * sum_i L_i / N`. Each cone's axis is the cosine-weighted mean direction of its cell
 //! and, unless an aperture is given, its aperture spans the cell's solid angle.
 
-use crate::scene::{ConeFilter, GiSettings};
+use crate::scene::{ConeFilter, GiSettings, Opacity};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
@@ -95,6 +95,8 @@ pub struct GpuGiParams {
 pub const GI_FLAG_AO: u32 = 1;
 /// `gi.cone_filter = "two-tap"`: the directional volumes hold opacity (glsl/include/cone.glsl).
 pub const GI_FLAG_TWO_TAP: u32 = 2;
+/// `gi.opacity = "layers"` (glsl/include/cone.glsl).
+pub const GI_FLAG_LAYERS: u32 = 4;
 
 impl GpuGiParams {
     /// The parameters for `gi` on a grid of `resolution` voxels of `voxel_size`, with
@@ -109,8 +111,9 @@ impl GpuGiParams {
         let res = resolution as f32;
         let max_distance =
             if gi.max_distance > 0.0 { gi.max_distance / voxel_size.max(f32::MIN_POSITIVE) } else { res * 3f32.sqrt() };
-        let flags =
-            if gi.ao { GI_FLAG_AO } else { 0 } | if gi.cone_filter == ConeFilter::TwoTap { GI_FLAG_TWO_TAP } else { 0 };
+        let flags = if gi.ao { GI_FLAG_AO } else { 0 }
+            | if gi.cone_filter == ConeFilter::TwoTap { GI_FLAG_TWO_TAP } else { 0 }
+            | if gi.opacity == Opacity::Layers { GI_FLAG_LAYERS } else { 0 };
         p.counts = [cones.len() as u32, gi.downsample, mip_levels, flags];
         p.trace = [gi.step, max_distance.min(res * 3f32.sqrt()), gi.start_offset, gi.ao_falloff / res];
         p.shadow =

@@ -85,8 +85,8 @@ impl VoxelPasses {
             let bounces = if volumes.needs.bounces > 0 {
                 let bounced = &volumes.bounced[0];
                 Some(BouncePasses {
-                    from_direct: VoxelBouncePass::new(ctx, frame, &volumes, &volumes.radiance)?,
-                    from_bounced: VoxelBouncePass::new(ctx, frame, &volumes, bounced)?,
+                    from_direct: VoxelBouncePass::new(ctx, frame, &volumes, &volumes.radiance, &scene_gpu.sky)?,
+                    from_bounced: VoxelBouncePass::new(ctx, frame, &volumes, bounced, &scene_gpu.sky)?,
                     compose: BounceComposePass::new(ctx, &volumes)?,
                     mips: VoxelMipPass::new(ctx, shared, &volumes, bounced)?,
                 })
@@ -311,7 +311,7 @@ impl ConePasses {
             _ => None,
         };
         Ok(ConePasses {
-            trace: GiTracePass::new(ctx, frame, gbuffer, volumes, traced, placeholders)?,
+            trace: GiTracePass::new(ctx, frame, gbuffer, volumes, traced, placeholders, &scene_gpu.sky)?,
             reflect,
             upsample,
             low,
@@ -719,6 +719,7 @@ impl FramePasses {
             gi: gi_inputs(cones.as_ref(), rsm.as_ref()),
             shadow_visibility: shadow_visibility(rt_shadow.as_ref(), cones.as_ref()),
             placeholders: &placeholders,
+            sky: &scene_gpu.sky,
         };
         let shading = Shading::new(ctx, scene, frame, voxels.as_ref(), lit)?;
         let views = plan.shadow_views;

@@ -31,7 +31,7 @@ pub const LIGHT_SPOT: f32 = 2.0;
 /// bounce and directional volumes, cone-tracing targets) holds radiance, so that the scene's
 /// typical radiance sits near 1, in the middle of the half-float range (6e-5 .. 65504), whatever
 /// the units: a 1e-6 W/sr light neither underflows nor does a 1e6 W/sr one overflow. Typical
-/// radiance is the largest of: the brightest emission, a directional light's E/pi, and a point
+/// radiance is the largest of: the brightest emission, the sky's mean radiance, a directional light's E/pi, and a point
 /// or spot light's I/pi at 5% of the scene's extent. Exact (a power of two), so scaling and
 /// unscaling round nothing; 1 for a scene without light.
 pub fn radiance_scale(scene: &Scene) -> f32 {
@@ -40,7 +40,11 @@ pub fn radiance_scale(scene: &Scene) -> f32 {
     let extent = if bounds.is_empty() { 0.0 } else { bounds.extent().max_element() };
     let near = if extent.is_finite() && extent > 0.0 { 0.05 * extent } else { 1.0 };
     let typical = scene.lights.iter().fold(
-        scene.materials.iter().map(|m| m.emission.max_element()).fold(0.0f32, f32::max),
+        scene
+            .materials
+            .iter()
+            .map(|m| m.emission.max_element())
+            .fold(scene.sky.as_ref().map_or(0.0, |s| s.mean_radiance()), f32::max),
         |acc, l| {
             let l = match l.at_time(t) {
                 LightKind::Directional { irradiance, .. } => irradiance.max_element() / std::f32::consts::PI,

@@ -17,6 +17,7 @@ pub mod relief;
 pub mod reuse;
 pub mod scene_gpu;
 pub mod schedule;
+pub mod sky;
 pub mod texture;
 pub mod voxel;
 
@@ -53,6 +54,8 @@ pub struct FrameUniforms {
     /// x: 1 with `render.exposure = "auto"` (the tone map adds the exposure passes' EV);
     /// y: how far the shown EV moves to this frame's (1: all the way; [`Renderer::ease_exposure`]).
     pub exposure: [f32; 4],
+    /// The sky (`sky::SkyParams::params`): x cos, y sin of its turn, z 1 with a sky, w unused.
+    pub sky: [f32; 4],
 }
 
 /// Per-frame data from the host, shared by the passes. The buffers are device-local and
@@ -210,6 +213,9 @@ impl Renderer {
             )));
         }
         let plan = FramePlan::of(&scene);
+        if scene.sky.is_some() && !sky::lit_by_sky(&scene) {
+            log::warn!("{}: {}", scene.path.display(), sky::sky_use(&scene).unwrap_or_default());
+        }
         // Refuse what cannot fit before allocating anything (async-pipelined: with a copy of
         // the frame's own resources per frame in flight).
         let copies = if options.mode.per_frame_copies() { options.frames_in_flight } else { 1 };
@@ -528,6 +534,7 @@ impl Renderer {
             radiance_scale: [self.radiance_scale, 1.0 / self.radiance_scale, 0.0, 0.0],
             voxel: [0; 4],
             exposure: [if s.exposure_auto { 1.0 } else { 0.0 }, exposure_step, 0.0, 0.0],
+            sky: self.scene_gpu.sky.params.params,
         };
         let upload = &self.copies[self.copy].upload;
         let bounds = self.scene.world_bounds(t);
@@ -671,6 +678,7 @@ pub(crate) fn test_scene(lights: Vec<crate::scene::LightKind>) -> Scene {
     use crate::scene::{Aabb, Camera, Light, Motion, RenderSettings};
     use glam::Vec3;
     Scene {
+        sky: None,
         path: std::path::PathBuf::from("test"),
         name: "test".into(),
         meshes: vec![],

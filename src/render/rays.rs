@@ -219,7 +219,8 @@ impl RtReflectPass {
 
     /// The bindings of glsl/rt_reflect.comp, in order: the G-buffer, the voxels (for the light
     /// at the hits), the target, the scene's rays, then the direct radiance the hits read and
-    /// the history (the reflections averaged over the frames the view and the scene stood still).
+    /// the history (the reflections averaged over the frames the view and the scene stood still),
+    /// then the sky's cone map (for the cones at the hits) and its radiance map (for misses).
     #[allow(clippy::too_many_arguments)]
     fn binds<'a>(
         frame: &'a FrameBuffers,
@@ -250,6 +251,8 @@ impl RtReflectPass {
             .extend(rays.binds(scene))
             .sampled(&v.radiance, v.sampler.raw, read)
             .storage_image(history, write)
+            .extend(scene.sky.cones_bind())
+            .extend(scene.sky.map_bind())
     }
 }
 

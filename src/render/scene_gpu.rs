@@ -71,6 +71,8 @@ pub struct SceneGpu {
     pub vertices: Buffer,
     pub indices: Buffer,
     pub materials: MaterialTable,
+    /// The sky's maps (black stand-ins without one).
+    pub sky: crate::render::sky::SkyGpu,
     /// Device-local; written each frame by the upload pass.
     pub instances: Arc<Buffer>,
     pub draws: Vec<Draw>,
@@ -294,7 +296,8 @@ pub fn upload_texture(ctx: &Arc<Context>, name: &str, texture: &Texture, relief:
         MemoryLocation::CpuToGpu,
     )?;
     staging.write(0, &bytes);
-    let regions = mip_copy_regions(&image, &levels);
+    let sizes: Vec<(u32, u32, usize)> = levels.iter().map(|l| (l.width, l.height, l.rgba8.len())).collect();
+    let regions = mip_copy_regions(&image, &sizes);
     record_texture_upload(ctx, name, &image, &staging, &regions)?;
     Ok(image)
 }
@@ -310,25 +313,52 @@ fn srgb_encode_data(levels: &mut [super::texture::MipLevel]) {
     }
 }
 
-/// One buffer-to-image copy per mip level, the levels packed one after another in the
-/// staging buffer.
-fn mip_copy_regions(image: &Image, levels: &[super::texture::MipLevel]) -> Vec<vk::BufferImageCopy> {
+/// One buffer-to-image copy per mip level, the levels (width, height, bytes) packed one after
+/// another in the staging buffer.
+fn mip_copy_regions(image: &Image, levels: &[(u32, u32, usize)]) -> Vec<vk::BufferImageCopy> {
     let mut offset = 0u64;
     levels
         .iter()
         .enumerate()
-        .map(|(i, l)| {
+        .map(|(i, &(width, height, bytes))| {
             let base = image.copy_region();
             let region = vk::BufferImageCopy {
                 buffer_offset: offset,
                 image_subresource: vk::ImageSubresourceLayers { mip_level: i as u32, ..base.image_subresource },
-                image_extent: vk::Extent3D { width: l.width, height: l.height, depth: 1 },
+                image_extent: vk::Extent3D { width, height, depth: 1 },
                 ..base
             };
-            offset += l.rgba8.len() as u64;
+            offset += bytes as u64;
             region
         })
         .collect()
+}
+
+/// A sampled 2D image of `format` whose mip levels are `levels` (width, height, texel bytes),
+/// uploaded and ready for the shaders.
+pub fn upload_levels(
+    ctx: &Arc<Context>,
+    name: &str,
+    format: vk::Format,
+    levels: &[(u32, u32, Vec<u8>)],
+) -> GpuResult<Image> {
+    let (width, height) = (levels[0].0, levels[0].1);
+    let mut desc =
+        ImageDesc::d2(format, width, height, vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST);
+    desc.mip_levels = levels.len() as u32;
+    let image = Image::new(ctx, name, desc)?;
+    let bytes: Vec<u8> = levels.iter().flat_map(|l| l.2.iter().copied()).collect();
+    let staging = Buffer::new(
+        ctx,
+        &format!("{name} staging"),
+        bytes.len() as u64,
+        vk::BufferUsageFlags::TRANSFER_SRC,
+        MemoryLocation::CpuToGpu,
+    )?;
+    staging.write(0, &bytes);
+    let sizes: Vec<(u32, u32, usize)> = levels.iter().map(|l| (l.0, l.1, l.2.len())).collect();
+    record_texture_upload(ctx, name, &image, &staging, &mip_copy_regions(&image, &sizes))?;
+    Ok(image)
 }
 
 /// Records and runs the upload: to TRANSFER_DST, copy every level from `staging`, then to
@@ -437,6 +467,7 @@ impl SceneGpu {
             vertices: vertex_buffer,
             indices: index_buffer,
             materials: MaterialTable::new(ctx, scene)?,
+            sky: crate::render::sky::SkyGpu::new(ctx, scene.sky.as_ref())?,
             instances,
             draws,
         })

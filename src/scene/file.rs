@@ -3,6 +3,7 @@
 
 use super::error::SceneError;
 use super::obj::{self, MapKind, ObjData};
+use super::sky::{build_sky, SkyContext, SkyDef, SKY_KEYS};
 use super::types::*;
 use super::LoadOptions;
 use glam::{Mat4, Vec3};
@@ -55,6 +56,8 @@ pub(crate) struct SceneFile {
     pub objects: Vec<ObjectDef>,
     #[serde(default)]
     pub lights: Vec<LightDef>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sky: Option<SkyDef>,
 }
 
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
@@ -374,7 +377,7 @@ pub(crate) struct LightDef {
 
 // The keys of each table, for `--set` (keys that are optional may be absent from the
 // serialized tree but can still be set). A unit test checks these against the structs.
-pub(crate) const TOP_KEYS: &[&str] = &["scene", "camera", "render", "gi", "materials", "objects", "lights"];
+pub(crate) const TOP_KEYS: &[&str] = &["scene", "camera", "render", "gi", "materials", "objects", "lights", "sky"];
 pub(crate) const GI_KEYS: &[&str] = &[
     "mode",
     "voxel_resolution",
@@ -399,6 +402,7 @@ pub(crate) const GI_KEYS: &[&str] = &[
     "shadows",
     "shadow_cone_angle",
     "cone_filter",
+    "opacity",
     "step",
     "max_distance",
     "start_offset",
@@ -492,6 +496,7 @@ fn table_schema(norm: &str) -> Option<TableSchema> {
         "objects.#.motion" | "lights.#.motion" => MOTION_KEYS,
         "objects.#.keyframes.#" => KEYFRAME_KEYS,
         "lights.#" => LIGHT_KEYS,
+        "sky" => SKY_KEYS,
         "objects.#.materials" => return Some(TableSchema::Free),
         _ => return None,
     }))
@@ -890,6 +895,21 @@ impl<'a> Ctx<'a> {
     }
 }
 
+impl SkyContext for Ctx<'_> {
+    fn color(&self, key: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+        Ctx::color(self, key, v)
+    }
+    fn scalar(&self, key: &str, v: f32) -> Result<f32, SceneError> {
+        Ctx::scalar(self, key, v)
+    }
+    fn invalid(&self, key: &str, message: String) -> SceneError {
+        Ctx::invalid(self, key, message)
+    }
+    fn resolve(&self, name: &str) -> Result<PathBuf, SceneError> {
+        Ctx::resolve(self, name)
+    }
+}
+
 /// The scene's textures, each file loaded once per way of decoding it.
 #[derive(Default)]
 struct TextureSet {
@@ -954,6 +974,7 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
     let names = MaterialNames { ids, defs: &file.materials };
     let (meshes, objects) = build_objects(&ctx, &file.objects, &names, &mut materials, &mut textures, settings.time)?;
     let lights = build_lights(&ctx, &file.lights, settings.time)?;
+    let sky = build_sky(&ctx, file.sky.as_ref())?;
     Ok(Scene {
         path: path.to_path_buf(),
         name,
@@ -963,6 +984,7 @@ pub(crate) fn build(path: &Path, file: SceneFile, opts: &LoadOptions) -> Result<
         textures: textures.textures,
         camera,
         lights,
+        sky,
         settings,
         bounds,
     })

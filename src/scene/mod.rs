@@ -11,6 +11,8 @@ mod preset;
 pub use preset::Preset;
 mod check;
 pub mod maps;
+mod sky;
+pub use sky::{equirect_dir, equirect_uv, gradient, load_sky_image, Sky, SkyImage, SkyKind};
 mod text;
 mod triangulate;
 

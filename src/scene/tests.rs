@@ -368,6 +368,7 @@ fn override_key_lists_match_the_schema() {
     assert_eq!(expected::<MotionDef>(""), sorted(MOTION_KEYS));
     assert_eq!(expected::<KeyframeDef>(""), sorted(KEYFRAME_KEYS));
     assert_eq!(expected::<LightDef>(""), sorted(LIGHT_KEYS));
+    assert_eq!(expected::<super::sky::SkyDef>("type = \"none\"\n"), sorted(super::sky::SKY_KEYS));
 }
 
 // ---------------------------------------------------------------------------------------------

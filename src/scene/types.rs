@@ -21,6 +21,8 @@ pub struct Scene {
     pub textures: Vec<Texture>,
     pub camera: Camera,
     pub lights: Vec<Light>,
+    /// What rays that leave the scene see (`[sky]`); `None`: black.
+    pub sky: Option<super::Sky>,
     pub settings: RenderSettings,
     /// Bounds given by the scene file (used by the voxel grid); `None` means "fit to geometry".
     pub bounds: Option<Aabb>,
@@ -463,6 +465,23 @@ pub enum ConeFilter {
     TwoTap,
 }
 
+/// What a cone sample's optical depth is, from the three directional volumes it blends
+/// (glsl/include/cone.glsl, ACCURACY.md "Sky light and leaks").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Opacity {
+    /// The volumes' optical depths averaged by the squared components of the cone's direction,
+    /// an occupied texel holding at most ln 256. A wall crossed at angle theta from its normal
+    /// holds cos(theta) of its optical depth: cones leak through walls they cross obliquely
+    /// (a sealed room under a sky gets a tenth to a fifth of its open-roof light), which also
+    /// hides part of the cones' excess on closed scenes.
+    Blend,
+    /// Optical depth per unit of path as the length of (|d_a| tau_a), exact for a wall across
+    /// any axis crossed at any angle and for isotropic cover, an occupied texel holding up to
+    /// ln 65536: walls of two voxels keep the sky out. Closed scenes come out brighter.
+    Layers,
+}
+
 /// How the voxel volumes are stored (render::voxel::bricks, docs/SPARSE.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -661,6 +680,8 @@ pub struct GiSettings {
     /// How each cone sample filters the directional volumes (opacity across the cone, optical
     /// depth along it: ACCURACY.md).
     pub cone_filter: ConeFilter,
+    /// How a cone sample's optical depth follows the walls it crosses (leaks: ACCURACY.md).
+    pub opacity: Opacity,
     /// Step along a cone as a fraction of its diameter (beta).
     pub step: f32,
     /// Longest cone in world units; 0 = the grid's diagonal.
@@ -715,6 +736,7 @@ impl Default for GiSettings {
             shadows: DirectShadows::ShadowMap,
             shadow_cone_angle: 6.0,
             cone_filter: ConeFilter::Trilinear,
+            opacity: Opacity::Blend,
             step: 0.5,
             max_distance: 0.0,
             start_offset: 0.0,

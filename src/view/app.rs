@@ -262,7 +262,12 @@ impl Viewer {
             return (egui::FullOutput::default(), Vec::new());
         };
         let s = &gpu.renderer.scene.settings;
-        let value = |key: &str| setting_value(s, key);
+        let sky = gpu.renderer.scene.sky.as_ref();
+        let value = |key: &str| match (key, sky) {
+            ("sky.scale", Some(sky)) => Some(format!("{:?}", sky.scale)),
+            ("sky.rotation", Some(sky)) => Some(format!("{:?}", sky.rotation_deg)),
+            _ => setting_value(s, key),
+        };
         let view = SettingsView {
             value: &value,
             schedule: self.settings.schedule,
@@ -271,6 +276,7 @@ impl Viewer {
             paused: self.paused,
             exposure: s.exposure,
             auto_exposure: s.exposure_auto.then(|| gpu.renderer.auto_exposure()),
+            image_sky: sky.is_some_and(|s| matches!(s.kind, crate::scene::SkyKind::Image(_))),
         };
         let present_mode = gpu.swapchain.as_ref().map(|s| format!("{:?}", s.present_mode)).unwrap_or_default();
         let timings = TimingsView {

@@ -93,6 +93,8 @@ pub struct SettingsView<'a> {
     pub exposure: f32,
     /// With `render.exposure = "auto"`: the EV it chose (eased), once a frame has run.
     pub auto_exposure: Option<Option<f32>>,
+    /// The sky is an image (it can be turned).
+    pub image_sky: bool,
 }
 
 /// The whole window: settings on the left, timings at the bottom, the frame in the middle.
@@ -188,8 +190,21 @@ pub fn settings(ui: &mut egui::Ui, v: &SettingsView, actions: &mut Vec<Action>) 
         knob_ui(ui, &Knob::Number("render.view_lod", "mip level", 0.0, 8.0), v, actions);
     }
     exposure(ui, v, actions);
+    sky(ui, v, actions);
     ui.separator();
     camera(ui, v, actions);
+}
+
+/// The sky's brightness and, for an image sky, its turn (a scene without a sky has neither).
+fn sky(ui: &mut egui::Ui, v: &SettingsView, actions: &mut Vec<Action>) {
+    if (v.value)("sky.scale").is_none() {
+        return;
+    }
+    ui.separator();
+    knob_ui(ui, &Knob::Number("sky.scale", "sky scale", 0.0, 8.0), v, actions);
+    if v.image_sky {
+        knob_ui(ui, &Knob::Number("sky.rotation", "sky turn (degrees)", -180.0, 180.0), v, actions);
+    }
 }
 
 /// The exposure: "auto" (GPU, eased; the EV it chose shown beside it) or a slider in EV; the

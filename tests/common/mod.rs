@@ -251,6 +251,7 @@ pub fn scene_of(
     let mut settings = dvsgi::scene::RenderSettings { width: 32, height: 32, ..Default::default() };
     settings.gi.voxel_resolution = 32;
     Scene {
+        sky: None,
         path: PathBuf::from("test"),
         name: "test".into(),
         meshes,

@@ -5,6 +5,7 @@ use super::gbuffer::GBuffer;
 use crate::gpu::{shaders, Access, Bind, Buffer, Context, GpuResult, Image, ImageDesc, Pipeline, Sampler};
 use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, QueueKind};
+use crate::render::sky::SkyGpu;
 use crate::render::voxel::VoxelVolumes;
 use crate::render::FrameBuffers;
 use ash::vk;
@@ -97,6 +98,7 @@ impl GiTracePass {
         volumes: &Arc<VoxelVolumes>,
         targets: GiTargets,
         placeholders: &Arc<GiPlaceholders>,
+        sky: &SkyGpu,
     ) -> GpuResult<Self> {
         let sampler = GBuffer::sampler(ctx)?;
         let v = volumes;
@@ -113,6 +115,7 @@ impl GiTracePass {
             .extend(targets.storage(placeholders, Access::ComputeShaderWrite))
             .extend(v.brick_maps(Access::ComputeShaderReadStorage))
             .extend(v.pools())
+            .extend(sky.cones_bind())
             .build(ctx, "gi trace", vk::ShaderStageFlags::COMPUTE)?;
         let pipeline = Pipeline::compute(
             ctx,

@@ -5,6 +5,7 @@ use super::gi_trace::{GiPlaceholders, GiTargets};
 use crate::gpu::{shaders, Access, Context, GpuResult, Image, Pipeline, Sampler};
 use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, QueueKind};
+use crate::render::sky::SkyGpu;
 use crate::render::FrameBuffers;
 use ash::vk;
 use std::sync::Arc;
@@ -58,6 +59,8 @@ pub struct LightingInputs<'a> {
     /// Traced visibility of lights 0..3 (shadow cones or rays), in place of their shadow maps.
     pub shadow_visibility: Option<&'a Arc<Image>>,
     pub placeholders: &'a Arc<GiPlaceholders>,
+    /// The background.
+    pub sky: &'a SkyGpu,
 }
 
 pub struct LightingPass {
@@ -74,7 +77,7 @@ impl LightingPass {
         inputs: LightingInputs,
         output: LightingOutput,
     ) -> GpuResult<Self> {
-        let LightingInputs { gbuffer, shadow_atlas, radiance, gi, shadow_visibility, placeholders } = inputs;
+        let LightingInputs { gbuffer, shadow_atlas, radiance, gi, shadow_visibility, placeholders, sky } = inputs;
         // The indirect light's targets (placeholders without GI) and the traced visibility.
         let targets = match &gi {
             Some(g) => GiTargets { shadow: shadow_visibility.cloned(), ..g.targets.clone() },
@@ -100,6 +103,7 @@ impl LightingPass {
             .overwritten()
             // Without GI the diffuse and specular placeholders are one image (held once).
             .extend(targets.storage(placeholders, Access::ComputeShaderReadStorage))
+            .extend(sky.map_bind())
             .build(ctx, "deferred lighting", vk::ShaderStageFlags::COMPUTE)?;
         let rt_specular = gi.as_ref().is_some_and(|g| g.rt_specular);
         let spec = [

@@ -7,6 +7,7 @@ use super::voxel_list::{dispatch_list, list_arguments, StaleZero};
 use crate::gpu::{shaders, Access, Bind, Context, GpuResult, Image, Pipeline};
 use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, QueueKind, Use};
+use crate::render::sky::SkyGpu;
 use crate::render::voxel::{work_list_header, VoxelVolumes};
 use crate::render::FrameBuffers;
 use ash::vk;
@@ -27,6 +28,7 @@ impl VoxelBouncePass {
         frame: &FrameBuffers,
         volumes: &Arc<VoxelVolumes>,
         source: &Arc<Image>,
+        sky: &SkyGpu,
     ) -> GpuResult<Self> {
         let target = &volumes.bounced[1];
         let v = volumes;
@@ -44,6 +46,7 @@ impl VoxelBouncePass {
             .storage(&v.list.buffer, buffer)
             .extend(v.brick_maps(read))
             .extend(v.pools())
+            .extend(sky.cones_bind())
             .build(ctx, &name, vk::ShaderStageFlags::COMPUTE)?;
         let pipeline = Pipeline::compute(ctx, "voxel bounce", shaders::VOXEL_BOUNCE_COMP, &[set.layout()], 0, &[])?;
         Ok(VoxelBouncePass { name, volumes: volumes.clone(), pipeline, set })

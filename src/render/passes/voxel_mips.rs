@@ -54,8 +54,13 @@ impl VoxelMips {
                 _ => 0,
             };
             let name = format!("voxel mips level {i}");
-            let spec =
-                [(0, u32::from(src.is_none())), (1, pool(src)), (2, pool(Some(dst))), (3, u32::from(v.needs.two_tap))];
+            let spec = [
+                (0, u32::from(src.is_none())),
+                (1, pool(src)),
+                (2, pool(Some(dst))),
+                (3, u32::from(v.needs.two_tap)),
+                (4, u32::from(v.needs.layers)),
+            ];
             let pipeline = Pipeline::compute(ctx, &name, shaders::ANISO_MIP_COMP, &[probe.layout()], 0, &spec)?;
             let set = src.map(|s| mip_set(ctx, v, &name, level(v, s), dst)).transpose()?;
             let apron = match dst {

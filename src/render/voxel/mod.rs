@@ -12,7 +12,7 @@ pub use grid::{VoxelGrid, RADIANCE_VOLUME_FORMAT};
 use crate::gpu::{Access, Buffer, Context, GpuError, GpuResult, Image, ImageDesc, Sampler};
 use crate::render::binding::Binds;
 use crate::render::cones::GpuGiParams;
-use crate::scene::{ConeFilter, GiSettings, Scene, View, VoxelLayout};
+use crate::scene::{ConeFilter, GiSettings, Opacity, Scene, View, VoxelLayout};
 use ash::vk;
 use bricks::{BrickLayout, Bricks, FullImages, MAX_POOLS};
 use bytemuck::{Pod, Zeroable};
@@ -59,6 +59,8 @@ pub struct VoxelNeeds {
     /// The directional volumes hold opacity for two-tap cone samples (`gi.cone_filter`), not
     /// optical depth.
     pub two_tap: bool,
+    /// `gi.opacity = "layers"`: a texel's optical depth may reach ln 65536, not ln 256.
+    pub layers: bool,
 }
 
 impl VoxelNeeds {
@@ -86,6 +88,7 @@ impl VoxelNeeds {
             cones,
             bounces: if cones { scene.settings.gi.bounces } else { 0 },
             two_tap: cones && scene.settings.gi.cone_filter == ConeFilter::TwoTap,
+            layers: cones && scene.settings.gi.opacity == Opacity::Layers,
         }
     }
 }
