@@ -795,6 +795,7 @@ fn print_scene(common: &CommonArgs, ctx: &std::sync::Arc<Context>, scene: dvsgi:
     let before = ctx.allocated_bytes();
     let time = scene.settings.time;
     let textures = scene.textures.len();
+    let has_sky = scene.sky.is_some();
     let mut renderer = Renderer::new(ctx, scene)?;
     outln!("  frame plan: {}", renderer.plan().summary().join("; "));
     outln!("  passes (first frame): {}", renderer.pass_names(false).join(" -> "));
@@ -812,6 +813,9 @@ fn print_scene(common: &CommonArgs, ctx: &std::sync::Arc<Context>, scene: dvsgi:
         renderer.texture_bytes() as f64 / (1024.0 * 1024.0),
         dvsgi::render::scene_gpu::max_anisotropy(ctx)
     );
+    if has_sky {
+        outln!("  sky maps and sampling tables: {:.2} MiB", renderer.sky_bytes() as f64 / (1024.0 * 1024.0));
+    }
     outln!(
         "  GPU memory allocated for the scene and frame: {:.2} MiB",
         (ctx.allocated_bytes() - before) as f64 / (1024.0 * 1024.0)

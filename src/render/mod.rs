@@ -396,6 +396,11 @@ impl Renderer {
         self.scene_gpu.materials.texture_bytes()
     }
 
+    /// GPU memory of the sky's maps and tables (black stand-ins without a sky).
+    pub fn sky_bytes(&self) -> u64 {
+        self.scene_gpu.sky.bytes()
+    }
+
     /// The voxel volumes, when the scene has them.
     pub fn voxels(&self) -> Option<&voxel::VoxelVolumes> {
         self.passes().voxels.as_ref().map(|v| &*v.volumes)

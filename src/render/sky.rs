@@ -11,6 +11,8 @@
 //!   a reads level log2(a / ALPHA0), blended between levels by the sampler: the sky a cone
 //!   sees past everything it met, filtered to its aperture. Level 6 (8x4) holds hemisphere
 //!   means, level 7 the whole sphere's.
+//! * The irradiance map: 128x64, irradiance / pi by normal, what the diffuse cones' sky must
+//!   add up to with nothing in the way ([`irradiance_map`]).
 //! * The sampling tables: texels drawn in proportion to luminance x sin(theta) (marginal over
 //!   rows, conditional within each), and each texel's density per unit of image area.
 
@@ -63,10 +65,10 @@ pub fn sky_use(scene: &Scene) -> Option<String> {
 
 /// GPU memory of the sky's maps and tables (what [`SkyGpu`] allocates, before alignment): the
 /// radiance map (RGBA32F), the cone map with its levels, the irradiance map, the path
-/// tracer's tables; the 1x1 stand-ins without a sky.
+/// tracer's tables; a few hundred bytes of black stand-ins without a sky.
 pub fn sky_bytes(sky: Option<&Sky>) -> u64 {
     let (w, h) = match sky.map(|s| &s.kind) {
-        None => return 3 * 2 * 16,
+        None => return 1024,
         Some(SkyKind::Image(img)) => (img.width as u64, img.height as u64),
         Some(SkyKind::Constant(_)) => (8, 4),
         Some(SkyKind::Gradient { .. }) => (2 * GRADIENT_ROWS as u64, GRADIENT_ROWS as u64),

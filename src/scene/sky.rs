@@ -180,7 +180,8 @@ pub(crate) fn build_sky(ctx: &impl SkyContext, def: Option<&SkyDef>) -> Result<O
     let Some(def) = def else { return Ok(None) };
     check_sky_keys(ctx, def)?;
     let scale = ctx.scalar("sky.scale", def.scale.unwrap_or(1.0))?;
-    if !(scale >= 0.0) {
+    // Finite already (Ctx::scalar).
+    if scale < 0.0 {
         return Err(ctx.invalid("sky.scale", format!("{scale} must be >= 0 (it multiplies the sky's radiance)")));
     }
     let rotation_deg = ctx.scalar("sky.rotation", def.rotation.unwrap_or(0.0))?;
