@@ -6,7 +6,7 @@
 mod common;
 
 use common::*;
-use dvsgi::reference::{PathTracer, ReferenceImage, ReferenceOptions};
+use dvsgi::reference::{ReferenceImage, ReferenceOptions};
 use dvsgi::render::voxel::VoxelGrid;
 use dvsgi::render::{FrameOutput, Renderer};
 use dvsgi::scene::*;
@@ -68,16 +68,9 @@ fn sun(direction: Vec3, irradiance: f32) -> Light {
 }
 
 fn trace(scene: &Scene, spp: u32, jitter: bool) -> ReferenceImage {
-    let ctx = context();
     let options =
         ReferenceOptions { spp, max_bounces: Some(0), seed: 3, batch_ms: 200.0, jitter, ..Default::default() };
-    let mut pt = PathTracer::new(&ctx, scene, options).expect("path tracer");
-    pt.run(|_, _| {}).expect("trace");
-    let image = pt.image().expect("read back");
-    drop(pt);
-    assert_no_validation_messages(&ctx);
-    assert_eq!(image.rejected, 0, "non-finite samples");
-    image
+    common::trace_reference(scene, options)
 }
 
 /// A white floor (y = 0) and, one unit above it, a red quad whose mask is opaque on its -x

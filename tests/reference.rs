@@ -55,18 +55,8 @@ fn trace_batched(
     jitter: bool,
     batch_ms: f64,
 ) -> ReferenceImage {
-    let ctx = context();
-    let mut pt = PathTracer::new(
-        &ctx,
-        scene,
-        ReferenceOptions { spp, max_bounces, seed, batch_ms, jitter, ..Default::default() },
-    )
-    .expect("path tracer");
-    pt.run(|_, _| {}).expect("trace");
-    let image = pt.image().expect("read back");
-    drop(pt);
-    assert_no_validation_messages(&ctx);
-    assert_eq!(image.rejected, 0, "non-finite samples");
+    let options = ReferenceOptions { spp, max_bounces, seed, batch_ms, jitter, ..Default::default() };
+    let image = common::trace_reference(scene, options);
     assert_eq!(image.spp, spp);
     image
 }
@@ -120,11 +110,7 @@ fn error_falls_like_one_over_root_spp() {
         assert!((0.7..1.4).contains(&(mse / predicted)), "variance estimate off: mse {mse}, predicted {predicted}");
         points.push(((spp as f64).ln(), mse.sqrt().ln()));
     }
-    // Least-squares slope of log RMSE against log spp: -1/2.
-    let n = points.len() as f64;
-    let (mx, my) = (points.iter().map(|p| p.0).sum::<f64>() / n, points.iter().map(|p| p.1).sum::<f64>() / n);
-    let slope = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>()
-        / points.iter().map(|p| (p.0 - mx).powi(2)).sum::<f64>();
+    let slope = common::slope(&points);
     println!("slope {slope:.3}");
     assert!((slope + 0.5).abs() < 0.08, "log RMSE / log spp slope {slope}, expected -0.5");
 }

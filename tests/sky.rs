@@ -5,22 +5,14 @@
 
 mod common;
 
-use common::{assert_no_validation_messages, context, dvsgi, load, render, repo, stderr};
-use dvsgi::reference::{PathTracer, ReferenceImage, ReferenceOptions};
+use common::{context, dvsgi, load, render, repo, stderr};
+use dvsgi::reference::{ReferenceImage, ReferenceOptions};
 use dvsgi::scene::{LoadOptions, Scene, SceneError};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
 fn trace(scene: &Scene, spp: u32, seed: u32, jitter: bool) -> ReferenceImage {
-    let ctx = context();
-    let options = ReferenceOptions { spp, seed, jitter, batch_ms: 200.0, ..Default::default() };
-    let mut pt = PathTracer::new(&ctx, scene, options).expect("path tracer");
-    pt.run(|_, _| {}).expect("trace");
-    let image = pt.image().expect("read back");
-    drop(pt);
-    assert_no_validation_messages(&ctx);
-    assert_eq!(image.rejected, 0, "non-finite samples");
-    image
+    common::trace_reference(scene, ReferenceOptions { spp, seed, jitter, batch_ms: 200.0, ..Default::default() })
 }
 
 /// An equirectangular RGB EXR of `w` x `h` texels.
@@ -176,10 +168,7 @@ fn an_image_sky_lights_a_plane_as_its_integral_says_and_converges_at_one_over_ro
         assert!((0.6..1.6).contains(&(mse / predicted)), "variance off: mse {mse}, predicted {predicted}");
         points.push(((spp as f64).ln(), mse.sqrt().ln()));
     }
-    let m = points.len() as f64;
-    let (mx, my) = (points.iter().map(|p| p.0).sum::<f64>() / m, points.iter().map(|p| p.1).sum::<f64>() / m);
-    let slope = points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>()
-        / points.iter().map(|p| (p.0 - mx).powi(2)).sum::<f64>();
+    let slope = common::slope(&points);
     println!("slope {slope:.3}");
     assert!((slope + 0.5).abs() < 0.1, "log RMSE / log spp slope {slope}, expected -0.5");
 

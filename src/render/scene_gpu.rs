@@ -269,7 +269,7 @@ fn fit_to_device(ctx: &Context, name: &str, levels: &mut Vec<super::texture::Mip
 pub fn upload_texture(ctx: &Arc<Context>, name: &str, texture: &Texture, relief: f32) -> GpuResult<Image> {
     let usage = texture.usage;
     let mut levels = super::texture::mip_chain_for(usage, texture.width, texture.height, &texture.rgba8, relief);
-    let (width, height) = fit_to_device(ctx, name, &mut levels);
+    fit_to_device(ctx, name, &mut levels);
     // One format for every texture: lavapipe (Mesa 22.3, LLVM 15) crashes compiling the path
     // tracer when textures of two formats are bound to it. Data in red, green and blue is
     // stored sRGB-encoded, so the sampler's decode returns the data value (steps of at most
@@ -279,27 +279,8 @@ pub fn upload_texture(ctx: &Arc<Context>, name: &str, texture: &Texture, relief:
     if usage != TextureUse::Color {
         srgb_encode_data(&mut levels);
     }
-    let mut desc = ImageDesc::d2(
-        vk::Format::R8G8B8A8_SRGB,
-        width,
-        height,
-        vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
-    );
-    desc.mip_levels = levels.len() as u32;
-    let image = Image::new(ctx, name, desc)?;
-    let bytes: Vec<u8> = levels.iter().flat_map(|l| l.rgba8.iter().copied()).collect();
-    let staging = Buffer::new(
-        ctx,
-        &format!("{name} staging"),
-        bytes.len() as u64,
-        vk::BufferUsageFlags::TRANSFER_SRC,
-        MemoryLocation::CpuToGpu,
-    )?;
-    staging.write(0, &bytes);
-    let sizes: Vec<(u32, u32, usize)> = levels.iter().map(|l| (l.width, l.height, l.rgba8.len())).collect();
-    let regions = mip_copy_regions(&image, &sizes);
-    record_texture_upload(ctx, name, &image, &staging, &regions)?;
-    Ok(image)
+    let levels: Vec<(u32, u32, Vec<u8>)> = levels.into_iter().map(|l| (l.width, l.height, l.rgba8)).collect();
+    upload_levels(ctx, name, vk::Format::R8G8B8A8_SRGB, &levels)
 }
 
 /// sRGB-encodes red, green and blue of every level (alpha stays as it is), so that the sRGB

@@ -1547,19 +1547,30 @@ fn check_light_keys(ctx: &Ctx, key: &str, l: &LightDef) -> Result<(), SceneError
         ("inner_angle", l.inner_angle.is_some()),
         ("outer_angle", l.outer_angle.is_some()),
     ];
-    for (k, is) in present {
+    let misplaced = |k: &str| {
+        let takes = allowed.join(", ");
+        let message =
+            format!("`{k}` does not apply to {} lights (they take: {takes}, plus name, cast_shadows, motion)", l.kind);
+        ctx.invalid(format!("{key}.{k}"), message)
+    };
+    let missing = |k: &str| ctx.invalid(format!("{key}.{k}"), format!("a {} light needs `{k}`", l.kind));
+    check_keys(&present, (allowed, required), misplaced, missing)
+}
+
+/// A table whose `type` decides its keys: the first of `present`'s keys that is set but not
+/// allowed gives `misplaced(key)`, the first required one that is unset `missing(key)`.
+pub(crate) fn check_keys(
+    present: &[(&str, bool)],
+    (allowed, required): (&[&str], &[&str]),
+    misplaced: impl Fn(&str) -> SceneError,
+    missing: impl Fn(&str) -> SceneError,
+) -> Result<(), SceneError> {
+    for &(k, is) in present {
         if is && !allowed.contains(&k) {
-            return Err(ctx.invalid(
-                format!("{key}.{k}"),
-                format!(
-                    "`{k}` does not apply to {} lights (they take: {}, plus name, cast_shadows, motion)",
-                    l.kind,
-                    allowed.join(", ")
-                ),
-            ));
+            return Err(misplaced(k));
         }
         if !is && required.contains(&k) {
-            return Err(ctx.invalid(format!("{key}.{k}"), format!("a {} light needs `{k}`", l.kind)));
+            return Err(missing(k));
         }
     }
     Ok(())

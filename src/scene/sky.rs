@@ -228,18 +228,13 @@ fn check_sky_keys(ctx: &impl SkyContext, def: &SkyDef) -> Result<(), SceneError>
         ("image", def.image.is_some()),
         ("rotation", def.rotation.is_some()),
     ];
-    for (k, is) in present {
-        if is && !allowed.contains(&k) {
-            return Err(ctx.invalid(
-                &format!("sky.{k}"),
-                format!("`{k}` does not apply to a {} sky (it takes: {}, plus scale)", def.kind, allowed.join(", ")),
-            ));
-        }
-        if !is && required.contains(&k) {
-            return Err(ctx.invalid(&format!("sky.{k}"), format!("a {} sky needs `{k}`", def.kind)));
-        }
-    }
-    Ok(())
+    let misplaced = |k: &str| {
+        let message =
+            format!("`{k}` does not apply to a {} sky (it takes: {}, plus scale)", def.kind, allowed.join(", "));
+        ctx.invalid(&format!("sky.{k}"), message)
+    };
+    let missing = |k: &str| ctx.invalid(&format!("sky.{k}"), format!("a {} sky needs `{k}`", def.kind));
+    super::file::check_keys(&present, (allowed, required), misplaced, missing)
 }
 
 /// Reads an equirectangular OpenEXR image of linear radiance (any channel layout the decoder

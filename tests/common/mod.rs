@@ -316,3 +316,23 @@ pub fn uv_quad(name: &str, p: [Vec3; 4], uv: [glam::Vec2; 4], normal: Vec3, mate
         bounds,
     }
 }
+
+/// Trace `scene` to `options.spp` with validation on; no non-finite sample.
+pub fn trace_reference(scene: &Scene, options: dvsgi::reference::ReferenceOptions) -> dvsgi::reference::ReferenceImage {
+    let ctx = context();
+    let mut pt = dvsgi::reference::PathTracer::new(&ctx, scene, options).expect("path tracer");
+    pt.run(|_, _| {}).expect("trace");
+    let image = pt.image().expect("read back");
+    drop(pt);
+    assert_no_validation_messages(&ctx);
+    assert_eq!(image.rejected, 0, "non-finite samples");
+    image
+}
+
+/// The least-squares slope of y against x (log RMSE against log spp: -1/2 for an unbiased
+/// estimator).
+pub fn slope(points: &[(f64, f64)]) -> f64 {
+    let n = points.len() as f64;
+    let (mx, my) = (points.iter().map(|p| p.0).sum::<f64>() / n, points.iter().map(|p| p.1).sum::<f64>() / n);
+    points.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>() / points.iter().map(|p| (p.0 - mx).powi(2)).sum::<f64>()
+}
