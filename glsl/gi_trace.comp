@@ -61,13 +61,20 @@ vec3 first_voxel_radiance(vec3 g, vec3 d) {
     VoxelWalk w = voxel_walk(g, d);
     vec3 sky = sky_cone(sky_cones, frame.sky, d, 0.0) * grid.params.y;
     if (any(lessThan(w.c, ivec3(0))) || any(greaterThanEqual(w.c, ivec3(res)))) return sky;
+    // Voxels hold premultiplied (L * cover, cover) (voxel.glsl): composited front to back.
+    vec3 seen = vec3(0.0);
+    float through = 1.0;
     for (int i = 0; i < 3 * 512; ++i) {
         ivec3 t = radiance_texel(w.c);
         vec4 v = t.x < 0 ? vec4(0.0) : texelFetch(vox_lod0, t, 0);
-        if (v.a > 0.0) return v.rgb;
-        if (!voxel_walk_step(w, res)) return sky;
+        if (v.a > 0.0) {
+            seen += through * v.rgb;
+            through *= 1.0 - clamp(v.a, 0.0, 1.0);
+            if (through <= 0.0) return seen;
+        }
+        if (!voxel_walk_step(w, res)) return seen + through * sky;
     }
-    return vec3(0.0);
+    return seen;
 }
 
 // The diagnostic alternative to the diffuse cones (gi.diffuse_rays = n): the mean radiance of

@@ -24,6 +24,9 @@ void main() {
     ivec3 t = full_texel(c);
     if (t.x < 0) return;
     // The direct radiance is sampled by cones (9^3 per slot), the scratch volume is not (8^3).
-    vec3 sum = imageLoad(vox_direct, radiance_texel(c)).rgb + imageLoad(vox_indirect, t).rgb;
-    RADIANCE_STORE(vox_bounced, c, vec4(min(sum, vec3(HALF_MAX)), 1.0));
+    // The direct radiance is premultiplied by the voxel's cover (voxel_light.comp), the
+    // gathered light is not.
+    vec4 direct = imageLoad(vox_direct, radiance_texel(c));
+    vec3 sum = direct.rgb + imageLoad(vox_indirect, t).rgb * direct.a;
+    RADIANCE_STORE(vox_bounced, c, vec4(min(sum, vec3(HALF_MAX)), direct.a));
 }

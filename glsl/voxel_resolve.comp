@@ -48,7 +48,14 @@ vec3 take_mean(ivec3 t, int first, uint count) {
 void resolve(ivec3 t, uint count) {
     float n = float(min(count, 255u));
     imageStore(vox_sums[SUM_COUNT], t, uvec4(0u));
-    imageStore(vox_albedo, t, uvec4(pack_rgb_count(take_mean(t, SUM_ALBEDO, count) * 255.0, n)));
+    // With gi.voxel_cover = "area" the fourth byte holds how much of the voxel its surfaces
+    // cover (voxel.glsl), else the sample count; either is 0 only where the voxel is empty.
+    float fourth = n;
+    if (AREA_COVER) {
+        fourth = cover_code(float(imageLoad(vox_sums[SUM_COVER], t).r) / float(grid.dims.w));
+        imageStore(vox_sums[SUM_COVER], t, uvec4(0u));
+    }
+    imageStore(vox_albedo, t, uvec4(pack_rgb_count(take_mean(t, SUM_ALBEDO, count) * 255.0, fourth)));
     // The normal volume's fourth byte holds where the surface lies (voxel.glsl, SUM_OFFSET).
     float offset = float(max(imageLoad(vox_sums[SUM_OFFSET], t).r, 1u) - 1u);
     imageStore(vox_sums[SUM_OFFSET], t, uvec4(0u));

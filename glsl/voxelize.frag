@@ -91,6 +91,9 @@ struct Footprint {
     vec2 middle;
     vec2 extent;  // of its bounding box, at most one pixel on each axis
     bool empty;
+    vec2 poly[8];  // its corners, raster coordinates
+    int count;
+    float area;    // in pixels: the share of the pixel square the triangle covers
 };
 
 Footprint clipped_pixel(vec2 px, vec2 a, vec2 b, vec2 c) {
@@ -128,7 +131,40 @@ Footprint clipped_pixel(vec2 px, vec2 a, vec2 b, vec2 c) {
     // A sliver with no area (the triangle only grazes the square): its corners' mean.
     f.middle = px + (abs(area2) > 1e-6 ? moment / (3.0 * area2) : mean / float(max(count, 1)));
     f.extent = max(hi - lo, vec2(0.0));
+    f.poly = poly;
+    f.count = count;
+    f.area = min(abs(area2) * 0.5, 1.0);
     return f;
+}
+
+// The triangle's depth w at raster position q: its plane through a with normal n (uvw).
+float plane_depth(vec2 q, vec3 a, vec3 n) {
+    return a.z - (n.x * (q.x - a.x) + n.y * (q.y - a.y)) / n.z;
+}
+
+// The area (pixels) of the footprint's part whose depth lies in the voxel slab [k, k + 1] of
+// the column (gi.voxel_cover = "area", voxel.glsl): the footprint clipped by the two lines
+// where the triangle's plane crosses the slab's faces.
+float slab_area(Footprint f, vec3 a, vec3 n, float k) {
+    vec2 poly[10];
+    for (int i = 0; i < 8; ++i) poly[i] = f.poly[i];
+    int count = f.count;
+    for (int side = 0; side < 2; ++side) {
+        vec2 kept[10];
+        int m = 0;
+        for (int i = 0; i < count; ++i) {
+            vec2 s = poly[i], t = poly[(i + 1) % count];
+            float ds = side == 0 ? plane_depth(s, a, n) - k : k + 1.0 - plane_depth(s, a, n);
+            float dt = side == 0 ? plane_depth(t, a, n) - k : k + 1.0 - plane_depth(t, a, n);
+            if (ds >= 0.0) kept[m++] = s;
+            if ((ds >= 0.0) != (dt >= 0.0)) kept[m++] = mix(s, t, ds / (ds - dt));
+        }
+        poly = kept;
+        count = min(m, 10);
+    }
+    float area2 = 0.0;
+    for (int i = 0; i < count; ++i) area2 += cross2(poly[i], poly[(i + 1) % count]);
+    return min(abs(area2) * 0.5, 1.0);
 }
 
 // What the fragment samples of its triangle: the texture coordinates, their gradient along
@@ -212,7 +248,18 @@ void main() {
     vec3 facing = dot(face, nrm) < 0.0 ? -face : face;
 
     // A plane with slope <= 1 along u and v spans at most 3 voxels of the column.
-    for (int k = k0; k <= min(k1, k0 + 3); ++k) {
+    int k_last = min(k1, k0 + 3);
+    // gi.voxel_cover = "area": each voxel's share of the footprint; the largest takes it all.
+    float share[4] = float[4](0.0, 0.0, 0.0, 0.0);
+    int widest = k0;
+    if (AREA_COVER && !MARK) {
+        for (int k = k0; k <= k_last; ++k) {
+            share[k - k0] = slab_area(covered, a, n, float(k));
+            if (share[k - k0] > share[widest - k0]) widest = k;
+        }
+        share[widest - k0] = covered.area;
+    }
+    for (int k = k0; k <= k_last; ++k) {
         vec3 voxel = from_uvw(vec3(px, k), g_axis);
         if (!triangle_box_overlap(voxel + 0.5, vec3(0.5), g_t0, g_t1, g_t2)) continue;
         ivec3 vc = ivec3(voxel);
@@ -231,6 +278,10 @@ void main() {
         add_sample(vt, SUM_ALBEDO, albedo);
         add_sample(vt, SUM_NORMAL, nrm * 0.5 + 0.5);
         imageAtomicMax(vox_sums[SUM_OFFSET], vt, surface_offset_word(dot(g_t0 - (voxel + 0.5), facing)));
+        if (AREA_COVER) {
+            uint cover = uint(round(clamp(share[k - k0], 0.0, 1.0) * float(grid.dims.w)));
+            if (cover != 0u) imageAtomicAdd(vox_sums[SUM_COVER], vt, cover);
+        }
         // Zeros count too (in the count): a half-emissive voxel emits half.
         if (HAS_EMISSION) add_sample(vt, SUM_EMISSION, emission);
         if (HAS_FLAGS && pc.mark_static != 0u) {

@@ -81,6 +81,9 @@ pub enum Param {
     Shadows,
     /// `gi.opacity`, how cone samples follow walls, by name (index in [`OPACITIES`]).
     Opacity,
+    /// `gi.voxel_cover`, how opaque a voxel its surfaces make, by name (index in
+    /// [`VOXEL_COVERS`]).
+    VoxelCover,
 }
 
 /// The `gi.mode` values a sweep can compare, in the order of their index as a knob value.
@@ -101,6 +104,13 @@ pub const SHADOW_KINDS: [&str; 3] = ["shadow-map", "cone", "rt"];
 
 /// The `gi.opacity` values, in the order of their index as a knob value.
 pub const OPACITIES: [&str; 2] = ["blend", "layers"];
+
+/// The `gi.voxel_cover` values, in the order of their index as a knob value.
+pub const VOXEL_COVERS: [&str; 2] = ["touch", "area"];
+
+fn touch() -> String {
+    "touch".to_owned()
+}
 
 fn blend() -> String {
     "blend".to_owned()
@@ -136,7 +146,7 @@ fn vct() -> String {
 }
 
 impl Param {
-    pub const ALL: [Param; 21] = [
+    pub const ALL: [Param; 22] = [
         Param::VoxelResolution,
         Param::DiffuseCones,
         Param::DiffuseConeAngle,
@@ -158,6 +168,7 @@ impl Param {
         Param::SpecularHistory,
         Param::Shadows,
         Param::Opacity,
+        Param::VoxelCover,
     ];
     /// The key under `[gi]`.
     pub fn key(self) -> &'static str {
@@ -183,6 +194,7 @@ impl Param {
             Param::SpecularHistory => "specular_history",
             Param::Shadows => "shadows",
             Param::Opacity => "opacity",
+            Param::VoxelCover => "voxel_cover",
         }
     }
     /// Short prefix in configuration labels.
@@ -209,6 +221,7 @@ impl Param {
             Param::SpecularHistory => "sh",
             Param::Shadows => "shadow-",
             Param::Opacity => "op-",
+            Param::VoxelCover => "cover-",
         }
     }
     /// The names a knob's values are written as, for knobs that take names.
@@ -219,6 +232,7 @@ impl Param {
             Param::RtHitIndirect => Some(&HIT_INDIRECT),
             Param::Shadows => Some(&SHADOW_KINDS),
             Param::Opacity => Some(&OPACITIES),
+            Param::VoxelCover => Some(&VOXEL_COVERS),
             _ => None,
         }
     }
@@ -426,6 +440,9 @@ pub struct Row {
     /// `gi.opacity` ("blend" in rows from before it was recorded).
     #[serde(default = "blend")]
     pub opacity: String,
+    /// `gi.voxel_cover` ("touch" in rows from before it was recorded).
+    #[serde(default = "touch")]
+    pub voxel_cover: String,
     /// Median host wall clock of a frame that updates the voxels (relight, mips, bounces)
     /// and traces: the cost when lights or objects move. The front is drawn against this.
     pub frame_ms: f64,
@@ -473,6 +490,7 @@ impl Row {
             specular_history: s.specular_history,
             shadows: s.shadows.name().to_owned(),
             opacity: serde_name(s.opacity).unwrap_or_else(blend),
+            voxel_cover: serde_name(s.voxel_cover).unwrap_or_else(touch),
             frame_ms: time[0],
             frame_p95_ms: time[1],
             static_frame_ms: time[2],
@@ -563,6 +581,7 @@ impl Row {
             Param::SpecularHistory => self.specular_history as f64,
             Param::Shadows => name_index(&SHADOW_KINDS, &self.shadows),
             Param::Opacity => name_index(&OPACITIES, &self.opacity),
+            Param::VoxelCover => name_index(&VOXEL_COVERS, &self.voxel_cover),
         }
     }
 }

@@ -8,7 +8,8 @@ struct VoxelGrid {
                      // z 1 when the volumes are bricked, 0 when dense; w the fixed-point
                      // one of the voxelization sums (sum_sample below)
     vec4 params;     // x emission scale: voxels store emission / scale in 8 bits;
-                     // y radiance scale: radiance volumes hold radiance * y; z = 1/y
+                     // y radiance scale: radiance volumes hold radiance * y; z = 1/y;
+                     // w 1 with gi.voxel_cover = "area", 0 with "touch" (AREA_COVER)
     uvec4 pools[4];  // brick pools (render::bricks): xyz slots per axis of the pool image,
                      // w bricks per side of its map; 0 full resolution, 1.. directional levels
 };
@@ -63,13 +64,37 @@ vec4 unpack_rgb_count(uint v) {
 // so that no sum can overflow: a voxel receives at most one sample per drawn triangle.
 // The sums are R32_UINT volumes of the full-resolution extent (pool 0 with bricks), one per
 // word: SUM_COUNT, then three per attribute (SUM_ALBEDO, SUM_NORMAL), one for the surface's
-// offset (SUM_OFFSET, below), three for SUM_EMISSION.
+// offset (SUM_OFFSET, below), three for SUM_EMISSION and one for the surfaces' cover
+// (SUM_COVER, below). The emission's words exist only with emission, the cover's only with
+// gi.voxel_cover = "area" (render::voxel::sum_word_indices); a placeholder, never touched,
+// is bound in their place otherwise.
 const int SUM_COUNT = 0;
 const int SUM_ALBEDO = 1;
 const int SUM_NORMAL = 4;
 const int SUM_OFFSET = 7;
 const int SUM_EMISSION = 8;
-const int SUM_WORDS = 11;  // with emission; 8 without
+const int SUM_COVER = 11;
+const int SUM_WORDS = 12;
+
+// How much of a voxel its surfaces cover (gi.voxel_cover): "touch" (every voxel a triangle
+// touches is opaque, the conservative voxelization) or "area" (grid.params.w = 1).
+// With "area" each sample adds the share of the voxel's cross-section its triangle covers,
+// across the triangle's dominant axis: the part of the fragment's pixel square the triangle
+// covers (its footprint), clipped to the voxel's slab of the column. Of the voxels one fragment
+// touches, the one holding the largest share takes the whole footprint, so a surface that
+// crosses a column stays opaque along it wherever the column splits it (watertight); the
+// others keep their own share, and a voxel a surface only grazes (an edge, a corner, the top
+// of a curtain) is that much opaque, not wholly. The voxel's opacity is the sum of its
+// samples' cover, at most 1, stored in place of the albedo volume's count (a code of 1..255,
+// so 0 still means empty), and the radiance volumes hold (L * cover, cover), premultiplied.
+// (A macro: the shaders that include this file declare `grid` after it.)
+#define AREA_COVER (grid.params.w > 0.5)
+
+// The albedo volume's fourth byte for a cover c in [0, 1] (1..255), and back.
+float cover_code(float c) {
+    return max(round(clamp(c, 0.0, 1.0) * 255.0), 1.0);
+}
+
 
 // Where the surface lies in its voxel: each sample's signed distance from the voxel's centre
 // to its triangle's plane, along the sample's normal (voxel units, |d| <= sqrt(3)/2). The

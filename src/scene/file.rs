@@ -403,6 +403,7 @@ pub(crate) const GI_KEYS: &[&str] = &[
     "shadow_cone_angle",
     "cone_filter",
     "opacity",
+    "voxel_cover",
     "step",
     "max_distance",
     "start_offset",

@@ -482,6 +482,21 @@ pub enum Opacity {
     Layers,
 }
 
+/// How much of a voxel a surface in it makes opaque (glsl/include/voxel.glsl, ACCURACY.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum VoxelCover {
+    /// Every voxel a triangle touches is opaque (conservative voxelization): thin surfaces
+    /// stand up to a voxel taller and thicker than they are, and openings narrower than about
+    /// two voxels close.
+    Touch,
+    /// A voxel is as opaque as the share of its cross-section its surfaces cover (across each
+    /// triangle's dominant axis, at most 1), and a surface stays opaque along every column it
+    /// crosses: a voxel a surface only grazes (an edge, the top of a curtain) is that much
+    /// opaque. The radiance volumes hold radiance premultiplied by it.
+    Area,
+}
+
 /// How the voxel volumes are stored (render::voxel::bricks, docs/SPARSE.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -682,6 +697,8 @@ pub struct GiSettings {
     pub cone_filter: ConeFilter,
     /// How a cone sample's optical depth follows the walls it crosses (leaks: ACCURACY.md).
     pub opacity: Opacity,
+    /// How much of a voxel its surfaces make opaque (thin surfaces and narrow openings).
+    pub voxel_cover: VoxelCover,
     /// Step along a cone as a fraction of its diameter (beta).
     pub step: f32,
     /// Longest cone in world units; 0 = the grid's diagonal.
@@ -737,6 +754,7 @@ impl Default for GiSettings {
             shadow_cone_angle: 6.0,
             cone_filter: ConeFilter::Trilinear,
             opacity: Opacity::Blend,
+            voxel_cover: VoxelCover::Touch,
             step: 0.5,
             max_distance: 0.0,
             start_offset: 0.0,

@@ -12,7 +12,7 @@ pub use grid::{VoxelGrid, RADIANCE_VOLUME_FORMAT};
 use crate::gpu::{Access, Buffer, Context, GpuError, GpuResult, Image, ImageDesc, Sampler};
 use crate::render::binding::Binds;
 use crate::render::cones::GpuGiParams;
-use crate::scene::{ConeFilter, GiSettings, Opacity, Scene, View, VoxelLayout};
+use crate::scene::{ConeFilter, GiSettings, Opacity, Scene, View, VoxelCover, VoxelLayout};
 use ash::vk;
 use bricks::{BrickLayout, Bricks, FullImages, MAX_POOLS};
 use bytemuck::{Pod, Zeroable};
@@ -33,12 +33,19 @@ pub struct GpuVoxelGrid {
 impl GpuVoxelGrid {
     /// The uniform for `grid` in its layout (`bricks`: its pools), with the voxelization's
     /// fixed-point one and the emission and radiance scales.
-    fn new(grid: &VoxelGrid, bricks: Option<&Bricks>, sum_scale: u32, [emission, radiance]: [f32; 2]) -> Self {
+    /// `area`: gi.voxel_cover = "area" (`AREA_COVER`).
+    fn new(
+        grid: &VoxelGrid,
+        bricks: Option<&Bricks>,
+        sum_scale: u32,
+        [emission, radiance]: [f32; 2],
+        area: bool,
+    ) -> Self {
         let pooled = bricks.map_or(0, |b| b.layout.pools.len() as u32 - 1);
         GpuVoxelGrid {
             origin: [grid.origin.x, grid.origin.y, grid.origin.z, grid.voxel_size],
             dims: [grid.resolution, pooled, u32::from(bricks.is_some()), sum_scale],
-            params: [emission, radiance, 1.0 / radiance, 0.0],
+            params: [emission, radiance, 1.0 / radiance, if area { 1.0 } else { 0.0 }],
             pools: pool_uniforms(bricks),
         }
     }
@@ -61,6 +68,8 @@ pub struct VoxelNeeds {
     pub two_tap: bool,
     /// `gi.opacity = "layers"`: a texel's optical depth may reach ln 65536, not ln 256.
     pub layers: bool,
+    /// `gi.voxel_cover = "area"`: the voxelization sums each voxel's cover (one more word).
+    pub area_cover: bool,
 }
 
 impl VoxelNeeds {
@@ -68,7 +77,7 @@ impl VoxelNeeds {
     /// albedo, normal, emission and the sums (R32_UINT), the static flags (R8_UINT), the
     /// bounce's scratch volume.
     pub fn full_images(&self) -> FullImages {
-        let words = 2 + u32::from(self.emission) + sum_words(self.emission) as u32;
+        let words = 2 + u32::from(self.emission) + sum_word_indices(self).len() as u32;
         FullImages { words, bytes: u32::from(self.dynamic), scratch: self.bounces > 0 }
     }
 
@@ -89,6 +98,7 @@ impl VoxelNeeds {
             bounces: if cones { scene.settings.gi.bounces } else { 0 },
             two_tap: cones && scene.settings.gi.cone_filter == ConeFilter::TwoTap,
             layers: cones && scene.settings.gi.opacity == Opacity::Layers,
+            area_cover: scene.settings.gi.voxel_cover == VoxelCover::Area,
         }
     }
 }
@@ -131,9 +141,11 @@ pub struct VoxelVolumes {
     /// The work list of occupied voxels the voxel passes dispatch over.
     pub list: VoxelList,
     /// The voxelization's sums (voxel.glsl): R32_UINT volumes of the full-resolution extent,
-    /// a count and three channels each of albedo, normal and (with emission) emission; zero
-    /// between voxelizations (the resolve zeroes what it reads).
-    pub sums: Vec<Arc<Image>>,
+    /// each with its word in `vox_sums[]` ([`sum_word_indices`]): a count, three channels each
+    /// of albedo, normal and (with emission) emission, the surface's offset and (with
+    /// `gi.voxel_cover = "area"`) the cover; zero between voxelizations (the resolve zeroes
+    /// what it reads).
+    pub sums: Vec<(usize, Arc<Image>)>,
     /// The fixed-point one of the sums ([`sum_scale`]).
     pub sum_scale: u32,
     /// Counts made offsets by glsl/scan.comp ([`ScanLayout`]): per 8^3 brick of the grid its
@@ -196,7 +208,7 @@ pub fn sum_scale(scene: &Scene) -> u32 {
 /// The six directions of the directional volumes, as their names say them.
 pub const DIRECTIONS: [&str; 6] = ["+x", "-x", "+y", "-y", "+z", "-z"];
 
-const SUM_NAMES: [&str; 11] = [
+const SUM_NAMES: [&str; 12] = [
     "count",
     "albedo r",
     "albedo g",
@@ -208,16 +220,22 @@ const SUM_NAMES: [&str; 11] = [
     "emission r",
     "emission g",
     "emission b",
+    "cover",
 ];
 
-/// Volumes of sums the voxelization adds to: a count, albedo and normal (three channels
-/// each), where the surface lies in the voxel (one), and with emission three more.
-pub fn sum_words(emission: bool) -> usize {
-    if emission {
-        11
-    } else {
-        8
+/// The volumes of sums the voxelization adds to, as their words in `vox_sums[]`
+/// (glsl/include/voxel.glsl): a count, albedo and normal (three channels each) and where the
+/// surface lies in the voxel (one); with emission three more; with `gi.voxel_cover = "area"`
+/// how much of the voxel its surfaces cover (one).
+pub fn sum_word_indices(needs: &VoxelNeeds) -> Vec<usize> {
+    let mut words: Vec<usize> = (0..8).collect();
+    if needs.emission {
+        words.extend(8..11);
     }
+    if needs.area_cover {
+        words.push(11);
+    }
+    words
 }
 
 /// Bricks of 8^3 in a grid of `resolution` (the voxel scan's granularity).
@@ -306,10 +324,10 @@ impl VoxelVolumes {
         let grid_buffer = Buffer::uniform(
             ctx,
             "voxel grid",
-            &GpuVoxelGrid::new(&grid, bricks.as_ref(), sum_scale, [emission_scale, radiance_scale]),
+            &GpuVoxelGrid::new(&grid, bricks.as_ref(), sum_scale, [emission_scale, radiance_scale], needs.area_cover),
         )?;
-        let sums = (SUM_NAMES.iter().zip(&specs.sums))
-            .map(|(w, a)| image(&format!("voxel sum {w}"), a))
+        let sums = (sum_word_indices(&needs).into_iter().zip(&specs.sums))
+            .map(|(w, a)| Ok((w, image(&format!("voxel sum {}", SUM_NAMES[w]), a)?)))
             .collect::<GpuResult<Vec<_>>>()?;
         let optional = |name: &str, a: &Option<Alloc>| a.as_ref().map(|a| image(name, a)).transpose();
         Ok(VoxelVolumes {
@@ -385,7 +403,7 @@ impl VoxelVolumes {
         v.extend(self.flags.as_ref());
         v.push(&self.radiance);
         v.extend(self.bounced.iter());
-        v.extend(self.sums.iter());
+        v.extend(self.sums.iter().map(|(_, image)| image));
         v
     }
 
@@ -395,10 +413,11 @@ impl VoxelVolumes {
         self.bounced.first().unwrap_or(&self.radiance)
     }
 
-    /// The sums (`vox_sums[SUM_WORDS]` in voxel.glsl), touched with `access`: the emission's
-    /// are the map placeholder where there is no emission (never written).
+    /// The sums (`vox_sums[SUM_WORDS]` in voxel.glsl), touched with `access`: the words the
+    /// scene does not need (emission, cover) are the map placeholder (never touched).
     pub fn sums_bound(&self, access: Access) -> Binds<'_> {
-        let bound = (0..sum_words(true)).map(|w| self.sums.get(w).unwrap_or(&self.map_placeholder));
+        let word = |w| self.sums.iter().find(|(i, _)| *i == w).map_or(&self.map_placeholder, |(_, image)| image);
+        let bound = (0..SUM_NAMES.len()).map(word);
         Binds::new().storage_images(bound, access)
     }
 

@@ -6,7 +6,7 @@
 
 use super::bricks::{brick_list_header, BrickLayout, BRICK};
 use super::grid::RADIANCE_VOLUME_FORMAT;
-use super::{sum_words, work_list_header, ScanLayout, VoxelNeeds};
+use super::{sum_word_indices, work_list_header, ScanLayout, VoxelNeeds};
 use crate::gpu::{Context, ImageDesc};
 use ash::vk;
 
@@ -107,7 +107,7 @@ impl VolumeSpecs {
             emission: needs.emission.then(|| volume(F::R32_UINT)),
             flags: needs.dynamic.then(|| volume(F::R8_UINT)),
             flags_placeholder: (!needs.dynamic).then(|| placeholder(F::R8_UINT, false)),
-            sums: (0..sum_words(needs.emission)).map(|_| volume(F::R32_UINT)).collect(),
+            sums: sum_word_indices(needs).iter().map(|_| volume(F::R32_UINT)).collect(),
             radiance,
             bounced: if needs.bounces > 0 { vec![radiance, volume(RADIANCE_VOLUME_FORMAT)] } else { Vec::new() },
             directional: needs.cones.then(|| Alloc::volume(RADIANCE_VOLUME_FORMAT, [side; 3], mips, true)),
