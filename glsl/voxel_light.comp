@@ -127,6 +127,6 @@ void main() {
         radiance += unpack_rgb_count(imageLoad(vox_emission, t).r).rgb / 255.0 * grid.params.x;
     }
     // Premultiplied by how much of the voxel its surfaces cover (voxel.glsl, AREA_COVER).
-    float cover = AREA_COVER ? float(a >> 24) / 255.0 : 1.0;
+    float cover = AREA_COVER ? albedo_cover(a) : 1.0;
     RADIANCE_STORE(vox_radiance, c, vec4(min(radiance * grid.params.y, vec3(HALF_MAX)) * cover, cover));
 }

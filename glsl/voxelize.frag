@@ -85,42 +85,57 @@ float cross2(vec2 a, vec2 b) {
     return a.x * b.y - a.y * b.x;
 }
 
+// A convex polygon in raster coordinates: the pixel square (4 corners) clipped by a
+// triangle's three edges has at most 7, and by a voxel slab's two lines at most 9.
+struct Polygon {
+    vec2 p[10];
+    int count;
+};
+
+// The part of `poly` where a linear function of position is >= 0, given its value d[i] at
+// each corner (Sutherland-Hodgman against one line).
+void clip_polygon(inout Polygon poly, float d[10]) {
+    Polygon kept;
+    kept.count = 0;
+    for (int i = 0; i < poly.count; ++i) {
+        int j = (i + 1) % poly.count;
+        if (d[i] >= 0.0) kept.p[kept.count++] = poly.p[i];
+        if ((d[i] >= 0.0) != (d[j] >= 0.0)) kept.p[kept.count++] = mix(poly.p[i], poly.p[j], d[i] / (d[i] - d[j]));
+    }
+    poly = kept;
+}
+
 // The part of the pixel square at px that the triangle (a, b, c: raster coordinates) covers:
-// the square clipped by the triangle's three edges (at most 7 corners).
+// the square clipped by the triangle's three edges.
 struct Footprint {
     vec2 middle;
-    vec2 extent;  // of its bounding box, at most one pixel on each axis
+    vec2 extent;   // of its bounding box, at most one pixel on each axis
     bool empty;
-    vec2 poly[8];  // its corners, raster coordinates
-    int count;
+    Polygon poly;  // its corners
     float area;    // in pixels: the share of the pixel square the triangle covers
 };
 
 Footprint clipped_pixel(vec2 px, vec2 a, vec2 b, vec2 c) {
-    vec2 poly[8] = vec2[8](px, px + vec2(1.0, 0.0), px + vec2(1.0), px + vec2(0.0, 1.0), vec2(0.0), vec2(0.0),
-                           vec2(0.0), vec2(0.0));
-    int count = 4;
+    Polygon poly;
+    poly.p[0] = px;
+    poly.p[1] = px + vec2(1.0, 0.0);
+    poly.p[2] = px + vec2(1.0);
+    poly.p[3] = px + vec2(0.0, 1.0);
+    poly.count = 4;
     vec2 tri[3] = vec2[3](a, b, c);
     float orient = cross2(b - a, c - a) >= 0.0 ? 1.0 : -1.0;
     for (int e = 0; e < 3; ++e) {
         vec2 p0 = tri[e], edge = tri[(e + 1) % 3] - p0;
-        vec2 kept[8];
-        int n = 0;
-        for (int i = 0; i < count; ++i) {
-            vec2 s = poly[i], t = poly[(i + 1) % count];
-            float ds = orient * cross2(edge, s - p0), dt = orient * cross2(edge, t - p0);
-            if (ds >= 0.0) kept[n++] = s;
-            if ((ds >= 0.0) != (dt >= 0.0)) kept[n++] = mix(s, t, ds / (ds - dt));
-        }
-        poly = kept;
-        count = n;
+        float d[10];
+        for (int i = 0; i < poly.count; ++i) d[i] = orient * cross2(edge, poly.p[i] - p0);
+        clip_polygon(poly, d);
     }
     Footprint f;
-    f.empty = count == 0;
+    f.empty = poly.count == 0;
     vec2 lo = vec2(1e30), hi = vec2(-1e30), mean = vec2(0.0), moment = vec2(0.0);
     float area2 = 0.0;
-    for (int i = 0; i < count; ++i) {
-        vec2 s = poly[i] - px, t = poly[(i + 1) % count] - px;
+    for (int i = 0; i < poly.count; ++i) {
+        vec2 s = poly.p[i] - px, t = poly.p[(i + 1) % poly.count] - px;
         float w = cross2(s, t);
         area2 += w;
         moment += (s + t) * w;
@@ -129,10 +144,9 @@ Footprint clipped_pixel(vec2 px, vec2 a, vec2 b, vec2 c) {
         hi = max(hi, s);
     }
     // A sliver with no area (the triangle only grazes the square): its corners' mean.
-    f.middle = px + (abs(area2) > 1e-6 ? moment / (3.0 * area2) : mean / float(max(count, 1)));
+    f.middle = px + (abs(area2) > 1e-6 ? moment / (3.0 * area2) : mean / float(max(poly.count, 1)));
     f.extent = max(hi - lo, vec2(0.0));
     f.poly = poly;
-    f.count = count;
     f.area = min(abs(area2) * 0.5, 1.0);
     return f;
 }
@@ -146,24 +160,14 @@ float plane_depth(vec2 q, vec3 a, vec3 n) {
 // the column (gi.voxel_cover = "area", voxel.glsl): the footprint clipped by the two lines
 // where the triangle's plane crosses the slab's faces.
 float slab_area(Footprint f, vec3 a, vec3 n, float k) {
-    vec2 poly[10];
-    for (int i = 0; i < 8; ++i) poly[i] = f.poly[i];
-    int count = f.count;
-    for (int side = 0; side < 2; ++side) {
-        vec2 kept[10];
-        int m = 0;
-        for (int i = 0; i < count; ++i) {
-            vec2 s = poly[i], t = poly[(i + 1) % count];
-            float ds = side == 0 ? plane_depth(s, a, n) - k : k + 1.0 - plane_depth(s, a, n);
-            float dt = side == 0 ? plane_depth(t, a, n) - k : k + 1.0 - plane_depth(t, a, n);
-            if (ds >= 0.0) kept[m++] = s;
-            if ((ds >= 0.0) != (dt >= 0.0)) kept[m++] = mix(s, t, ds / (ds - dt));
-        }
-        poly = kept;
-        count = min(m, 10);
-    }
+    Polygon poly = f.poly;
+    float d[10];
+    for (int i = 0; i < poly.count; ++i) d[i] = plane_depth(poly.p[i], a, n) - k;
+    clip_polygon(poly, d);
+    for (int i = 0; i < poly.count; ++i) d[i] = k + 1.0 - plane_depth(poly.p[i], a, n);
+    clip_polygon(poly, d);
     float area2 = 0.0;
-    for (int i = 0; i < count; ++i) area2 += cross2(poly[i], poly[(i + 1) % count]);
+    for (int i = 0; i < poly.count; ++i) area2 += cross2(poly.p[i], poly.p[(i + 1) % poly.count]);
     return min(abs(area2) * 0.5, 1.0);
 }
 

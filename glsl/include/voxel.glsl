@@ -90,9 +90,14 @@ const int SUM_WORDS = 12;
 // (A macro: the shaders that include this file declare `grid` after it.)
 #define AREA_COVER (grid.params.w > 0.5)
 
-// The albedo volume's fourth byte for a cover c in [0, 1] (1..255), and back.
+// The albedo volume's fourth byte for a cover c in [0, 1] (1..255), and the cover an albedo
+// word holds.
 float cover_code(float c) {
     return max(round(clamp(c, 0.0, 1.0) * 255.0), 1.0);
+}
+
+float albedo_cover(uint albedo_word) {
+    return float(albedo_word >> 24) / 255.0;
 }
 
 
