@@ -6,8 +6,10 @@
 // the four rows are averaged. Same for -x (front = high x), +y, -y, +z, -z. Texels are stored
 // as (L * tau, tau) for trilinear cone samples, or premultiplied (c, alpha) for two-tap ones
 // (TWO_TAP; voxel.glsl); the full-resolution volume holds (L, occupancy 0 or 1), which is
-// premultiplied already. With bricked volumes (bricks.glsl) a pooled level is
-// written brick by brick over its resident bricks (indirect), and read through its map.
+// premultiplied already; with gi.voxel_cover = "directional" level 0 weighs each voxel by how
+// much of its surface faces the volume's axis (seen_from). With bricked volumes (bricks.glsl)
+// a pooled level is written brick by brick over its resident bricks (indirect), and read
+// through its map.
 #include "common.glsl"
 #include "voxel.glsl"
 
@@ -41,6 +43,8 @@ layout(set = 0, binding = 3, r32ui) uniform readonly uimage3D brick_maps[4];
 #define BRICK_LIST_BINDING 4
 #define BRICK_LIST_QUALIFIER readonly
 #include "brick_list.glsl"
+// The full-resolution normal volume (voxel.glsl; read by level 0 with DIRECTIONAL_COVER).
+layout(set = 0, binding = 5, r32ui) uniform readonly uimage3D vox_normal;
 
 vec4 over(vec4 front, vec4 back) {
     return front + (1.0 - clamp(front.a, 0.0, 1.0)) * back;
@@ -56,12 +60,27 @@ ivec3 src_texel(ivec3 C) {
 // each face's image: where, found once (from the full-resolution volume, also what).
 ivec3 block_texel[8];
 vec4 full_block[8];
+// With DIRECTIONAL_COVER, each full-resolution voxel's share seen along x, y, z.
+vec3 block_share[8];
 
 void find_block(ivec3 base) {
     for (int i = 0; i < 8; ++i) {
-        block_texel[i] = src_texel(base + ivec3(i & 1, (i >> 1) & 1, i >> 2));
-        if (FROM_FULL) full_block[i] = block_texel[i].x < 0 ? vec4(0.0) : imageLoad(src[0], block_texel[i]);
+        ivec3 c = base + ivec3(i & 1, (i >> 1) & 1, i >> 2);
+        block_texel[i] = src_texel(c);
+        block_share[i] = vec3(1.0);
+        if (!FROM_FULL) continue;
+        full_block[i] = block_texel[i].x < 0 ? vec4(0.0) : imageLoad(src[0], block_texel[i]);
+        if (DIRECTIONAL_COVER && full_block[i].a > 0.0) {
+            vec3 n = unpack_rgb_count(imageLoad(vox_normal, full_texel(c)).r).rgb / 255.0 * 2.0 - 1.0;
+            block_share[i] = vec3(directional_share(n, 0), directional_share(n, 1), directional_share(n, 2));
+        }
     }
+}
+
+// Voxel i of the block as the volume of direction `face` sees it: with DIRECTIONAL_COVER, its
+// cover along that axis (directional_share), radiance premultiplied.
+vec4 seen_from(vec4 v, int i, int face) {
+    return DIRECTIONAL_COVER ? v * block_share[i][face / 2] : v;
 }
 
 // Literal indices only: arrays of storage images are not indexed dynamically.
@@ -70,7 +89,7 @@ void find_block(ivec3 base) {
     vec4 load_##FACE(ivec3 C) {                                                       \
         ivec3 o = C & 1;                                                              \
         int i = o.x + 2 * o.y + 4 * o.z;                                              \
-        if (FROM_FULL) return full_block[i];                                          \
+        if (FROM_FULL) return seen_from(full_block[i], i, FACE);                      \
         ivec3 t = block_texel[i];                                                     \
         return t.x < 0 ? vec4(0.0) : premultiplied(imageLoad(src[FACE], t));         \
     }

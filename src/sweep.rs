@@ -106,7 +106,7 @@ pub const SHADOW_KINDS: [&str; 3] = ["shadow-map", "cone", "rt"];
 pub const OPACITIES: [&str; 2] = ["blend", "layers"];
 
 /// The `gi.voxel_cover` values, in the order of their index as a knob value.
-pub const VOXEL_COVERS: [&str; 2] = ["touch", "area"];
+pub const VOXEL_COVERS: [&str; 3] = ["touch", "area", "directional"];
 
 fn touch() -> String {
     "touch".to_owned()

@@ -9,7 +9,8 @@ struct VoxelGrid {
                      // one of the voxelization sums (sum_sample below)
     vec4 params;     // x emission scale: voxels store emission / scale in 8 bits;
                      // y radiance scale: radiance volumes hold radiance * y; z = 1/y;
-                     // w 1 with gi.voxel_cover = "area", 0 with "touch" (AREA_COVER)
+                     // w gi.voxel_cover: 0 "touch", 1 "area", 2 "directional"
+                     // (AREA_COVER, DIRECTIONAL_COVER)
     uvec4 pools[4];  // brick pools (render::bricks): xyz slots per axis of the pool image,
                      // w bricks per side of its map; 0 full resolution, 1.. directional levels
 };
@@ -89,6 +90,21 @@ const int SUM_WORDS = 12;
 // so 0 still means empty), and the radiance volumes hold (L * cover, cover), premultiplied.
 // (A macro: the shaders that include this file declare `grid` after it.)
 #define AREA_COVER (grid.params.w > 0.5)
+// gi.voxel_cover = "directional" (with AREA_COVER): seen along axis a a voxel covers its cover
+// times directional_share(n, a) (aniso_mip.comp).
+#define DIRECTIONAL_COVER (grid.params.w > 1.5)
+
+// How much of a voxel's cover is seen along axis a, from its surfaces' mean normal n (|n| <= 1):
+// a plane of area A in the voxel covers A |n_a| of the face across a, and its cover (the share
+// across its dominant axis d) is A |n_d|, so the share along a is |n_a| / |n_d|. Where the
+// normals disagree (|n| < 1/2: both sides of a thin slab, a corner's faces) the surfaces are
+// not one plane, and the voxel is as opaque along every axis.
+float directional_share(vec3 n, int a) {
+    vec3 m = abs(n);
+    float top = max(m.x, max(m.y, m.z));
+    if (dot(n, n) < 0.25 || top <= 0.0) return 1.0;
+    return m[a] / top;
+}
 
 // The albedo volume's fourth byte for a cover c in [0, 1] (1..255), and the cover an albedo
 // word holds.

@@ -495,6 +495,11 @@ pub enum VoxelCover {
     /// crosses: a voxel a surface only grazes (an edge, the top of a curtain) is that much
     /// opaque. The radiance volumes hold radiance premultiplied by it.
     Area,
+    /// "area", and seen along each axis a voxel covers that share times how much of its
+    /// surface faces that axis (|n_a| / max |n| of its mean normal n; the same along every axis
+    /// where its normals disagree): a floor's voxels are open and dark seen edge-on, as the
+    /// floor is (glsl/aniso_mip.comp).
+    Directional,
 }
 
 /// How the voxel volumes are stored (render::voxel::bricks, docs/SPARSE.md).

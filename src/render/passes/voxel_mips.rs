@@ -119,7 +119,8 @@ fn source(volume: &Arc<Image>) -> Binds<'_> {
     Binds::new().storage_images([volume; 6], Access::ComputeShaderReadStorage)
 }
 
-/// The source (six views), the destination level, the grid, the brick maps and lists.
+/// The source (six views), the destination level, the grid, the brick maps and lists, the
+/// normal volume (read by level 0 with `gi.voxel_cover = "directional"`).
 fn mip_set<'a>(ctx: &Arc<Context>, v: &'a VoxelVolumes, name: &str, src: Binds<'a>, dst: Level) -> GpuResult<PassSet> {
     // Without bricks the shader never reads the brick lists: the voxel list stands in.
     let lists = v.bricks.as_ref().map_or(&v.list.buffer, |b| &b.lists);
@@ -127,6 +128,7 @@ fn mip_set<'a>(ctx: &Arc<Context>, v: &'a VoxelVolumes, name: &str, src: Binds<'
         .loaded(Bind::Uniform(&v.grid_buffer))
         .extend(v.brick_maps(Access::ComputeShaderReadStorage))
         .storage(lists, Access::ComputeShaderReadBuffer)
+        .storage_image(&v.normal, Access::ComputeShaderReadStorage)
         .build(ctx, name, vk::ShaderStageFlags::COMPUTE)
 }
 

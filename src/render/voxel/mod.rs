@@ -33,21 +33,31 @@ pub struct GpuVoxelGrid {
 impl GpuVoxelGrid {
     /// The uniform for `grid` in its layout (`bricks`: its pools), with the voxelization's
     /// fixed-point one and the emission and radiance scales.
-    /// `area`: gi.voxel_cover = "area" (`AREA_COVER`).
+    /// `cover`: gi.voxel_cover (`AREA_COVER`, `DIRECTIONAL_COVER`).
     fn new(
         grid: &VoxelGrid,
         bricks: Option<&Bricks>,
         sum_scale: u32,
         [emission, radiance]: [f32; 2],
-        area: bool,
+        cover: VoxelCover,
     ) -> Self {
         let pooled = bricks.map_or(0, |b| b.layout.pools.len() as u32 - 1);
         GpuVoxelGrid {
             origin: [grid.origin.x, grid.origin.y, grid.origin.z, grid.voxel_size],
             dims: [grid.resolution, pooled, u32::from(bricks.is_some()), sum_scale],
-            params: [emission, radiance, 1.0 / radiance, if area { 1.0 } else { 0.0 }],
+            params: [emission, radiance, 1.0 / radiance, cover_code(cover)],
             pools: pool_uniforms(bricks),
         }
+    }
+}
+
+/// `grid.params.w` for a voxel cover (glsl/include/voxel.glsl: `AREA_COVER` from 1,
+/// `DIRECTIONAL_COVER` from 2).
+fn cover_code(cover: VoxelCover) -> f32 {
+    match cover {
+        VoxelCover::Touch => 0.0,
+        VoxelCover::Area => 1.0,
+        VoxelCover::Directional => 2.0,
     }
 }
 
@@ -68,8 +78,12 @@ pub struct VoxelNeeds {
     pub two_tap: bool,
     /// `gi.opacity = "layers"`: a texel's optical depth may reach ln 65536, not ln 256.
     pub layers: bool,
-    /// `gi.voxel_cover = "area"`: the voxelization sums each voxel's cover (one more word).
+    /// `gi.voxel_cover = "area"` or `"directional"`: the voxelization sums each voxel's cover
+    /// (one more word).
     pub area_cover: bool,
+    /// `gi.voxel_cover = "directional"`: the first directional level weighs each voxel's cover
+    /// by its mean normal.
+    pub directional_cover: bool,
 }
 
 impl VoxelNeeds {
@@ -98,7 +112,8 @@ impl VoxelNeeds {
             bounces: if cones { scene.settings.gi.bounces } else { 0 },
             two_tap: cones && scene.settings.gi.cone_filter == ConeFilter::TwoTap,
             layers: cones && scene.settings.gi.opacity == Opacity::Layers,
-            area_cover: scene.settings.gi.voxel_cover == VoxelCover::Area,
+            area_cover: scene.settings.gi.voxel_cover != VoxelCover::Touch,
+            directional_cover: scene.settings.gi.voxel_cover == VoxelCover::Directional,
         }
     }
 }
@@ -143,7 +158,7 @@ pub struct VoxelVolumes {
     /// The voxelization's sums (voxel.glsl): R32_UINT volumes of the full-resolution extent,
     /// each with its word in `vox_sums[]` ([`sum_word_indices`]): a count, three channels each
     /// of albedo, normal and (with emission) emission, the surface's offset and (with
-    /// `gi.voxel_cover = "area"`) the cover; zero between voxelizations (the resolve zeroes
+    /// `gi.voxel_cover = "area"` or `"directional"`) the cover; zero between voxelizations (the resolve zeroes
     /// what it reads).
     pub sums: Vec<(usize, Arc<Image>)>,
     /// The fixed-point one of the sums ([`sum_scale`]).
@@ -226,7 +241,7 @@ const SUM_NAMES: [&str; 12] = [
 /// The volumes of sums the voxelization adds to, as their words in `vox_sums[]`
 /// (glsl/include/voxel.glsl): a count, albedo and normal (three channels each) and where the
 /// surface lies in the voxel (one); with emission three more; with `gi.voxel_cover = "area"`
-/// how much of the voxel its surfaces cover (one).
+/// or `"directional"` how much of the voxel its surfaces cover (one).
 pub fn sum_word_indices(needs: &VoxelNeeds) -> Vec<usize> {
     let mut words: Vec<usize> = (0..8).collect();
     if needs.emission {
@@ -324,7 +339,13 @@ impl VoxelVolumes {
         let grid_buffer = Buffer::uniform(
             ctx,
             "voxel grid",
-            &GpuVoxelGrid::new(&grid, bricks.as_ref(), sum_scale, [emission_scale, radiance_scale], needs.area_cover),
+            &GpuVoxelGrid::new(
+                &grid,
+                bricks.as_ref(),
+                sum_scale,
+                [emission_scale, radiance_scale],
+                scene.settings.gi.voxel_cover,
+            ),
         )?;
         let sums = (sum_word_indices(&needs).into_iter().zip(&specs.sums))
             .map(|(w, a)| Ok((w, image(&format!("voxel sum {}", SUM_NAMES[w]), a)?)))
