@@ -81,9 +81,6 @@ pub struct VoxelNeeds {
     /// `gi.voxel_cover = "area"` or `"directional"`: the voxelization sums each voxel's cover
     /// (one more word).
     pub area_cover: bool,
-    /// `gi.voxel_cover = "directional"`: the first directional level weighs each voxel's cover
-    /// by its mean normal.
-    pub directional_cover: bool,
 }
 
 impl VoxelNeeds {
@@ -113,7 +110,6 @@ impl VoxelNeeds {
             two_tap: cones && scene.settings.gi.cone_filter == ConeFilter::TwoTap,
             layers: cones && scene.settings.gi.opacity == Opacity::Layers,
             area_cover: scene.settings.gi.voxel_cover != VoxelCover::Touch,
-            directional_cover: scene.settings.gi.voxel_cover == VoxelCover::Directional,
         }
     }
 }
