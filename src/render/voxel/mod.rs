@@ -45,7 +45,7 @@ impl GpuVoxelGrid {
         GpuVoxelGrid {
             origin: [grid.origin.x, grid.origin.y, grid.origin.z, grid.voxel_size],
             dims: [grid.resolution, pooled, u32::from(bricks.is_some()), sum_scale],
-            params: [emission, radiance, 1.0 / radiance, cover_code(cover)],
+            params: [emission, radiance, 1.0 / radiance, cover_param(cover)],
             pools: pool_uniforms(bricks),
         }
     }
@@ -53,7 +53,7 @@ impl GpuVoxelGrid {
 
 /// `grid.params.w` for a voxel cover (glsl/include/voxel.glsl: `AREA_COVER` from 1,
 /// `DIRECTIONAL_COVER` from 2).
-fn cover_code(cover: VoxelCover) -> f32 {
+fn cover_param(cover: VoxelCover) -> f32 {
     match cover {
         VoxelCover::Touch => 0.0,
         VoxelCover::Area => 1.0,
@@ -154,8 +154,8 @@ pub struct VoxelVolumes {
     /// The voxelization's sums (voxel.glsl): R32_UINT volumes of the full-resolution extent,
     /// each with its word in `vox_sums[]` ([`sum_word_indices`]): a count, three channels each
     /// of albedo, normal and (with emission) emission, the surface's offset and (with
-    /// `gi.voxel_cover = "area"` or `"directional"`) the cover; zero between voxelizations (the resolve zeroes
-    /// what it reads).
+    /// `gi.voxel_cover = "area"` or `"directional"`) the cover; zero between voxelizations
+    /// (the resolve zeroes what it reads).
     pub sums: Vec<(usize, Arc<Image>)>,
     /// The fixed-point one of the sums ([`sum_scale`]).
     pub sum_scale: u32,
