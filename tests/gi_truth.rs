@@ -676,9 +676,12 @@ fn specular_light_comes_from_the_mirror_direction() {
 /// McGuire's glossy Cornell box (a glossy sphere and box, an emissive ceiling light) at the
 /// defaults, 64x64 and 64^3 voxels, against its cached reference (`dvsgi reference
 /// scenes/cornell-glossy.toml --width 64 --height 64 --spp 4096`): the whole image within
-/// 0.88..1.08 of the reference's energy and every mesh within 0.6..1.6 (measured: 0.76 for the
-/// floor .. 1.49 for the glossy box); without the specular cone the glossy objects lose most
-/// of their reflected light.
+/// 0.88..1.08 of the reference's energy and every mesh within 0.6..1.65 (measured: 0.86 for the
+/// floor and the ceiling .. 1.61 for the glossy box); without the specular cone the glossy
+/// objects lose most of their reflected light. The bound was 1.6 while one frame held 4
+/// bounces: the glossy box got 1.57 from it, and 1.60 after 8 frames; with the first update's
+/// bounce tail one frame holds the converged light, 1.61, as 16 bounces do (ACCURACY.md, "The
+/// first update's bounce tail").
 #[test]
 fn glossy_cornell_box_agrees_with_the_reference() {
     let ctx = context();
@@ -704,7 +707,7 @@ fn glossy_cornell_box_agrees_with_the_reference() {
     let mut report = String::new();
     for s in with.iter().filter(|s| s.grouping == Grouping::Mesh) {
         report += &format!("{} {:.3}; ", s.name, s.ratio);
-        assert!((0.6..=1.6).contains(&s.ratio), "{}: {:.3} of the reference", s.name, s.ratio);
+        assert!((0.6..=1.65).contains(&s.ratio), "{}: {:.3} of the reference", s.name, s.ratio);
     }
     eprintln!("glossy Cornell box, image {:.3}, by mesh: {report}", with[0].ratio);
     assert!((0.88..=1.08).contains(&with[0].ratio), "image energy {:.3}", with[0].ratio);
@@ -798,20 +801,53 @@ fn open_corner_room() -> Scene {
     s
 }
 
+/// The first update's bounce tail (`gi.bounce_tail`): one frame of the open-corner room, a
+/// closed white room where light bounces many times (its fourth and later bounces are 30% of
+/// its indirect light), holds with the default 4 bounces and the tail what 16 bounces give,
+/// surface by surface, where 4 bounces alone leave out an eighth of it. Measured (lavapipe,
+/// 32^3): the tail within 0.5% of 16 bounces on every surface; 4 bounces alone 0.86-0.89.
+#[test]
+fn the_first_update_adds_the_bounces_it_does_not_run() {
+    let ctx = context();
+    let mut scene = open_corner_room();
+    scene.settings.gi.voxel_resolution = 32;
+    scene.settings.view = dvsgi::scene::View::Indirect;
+    let map = RegionMap::trace(&scene, 48, 48);
+    let indirect = |bounces: u32, tail: bool| {
+        let mut s = scene.clone();
+        s.settings.gi.first_update_bounces = bounces;
+        s.settings.gi.bounce_tail = tail;
+        linear(&render(&ctx, s).0)
+    };
+    let converged = indirect(16, false);
+    let ratios = |test: &LinearImage| -> Vec<(String, f64)> {
+        let pair = Pair { test, reference: &converged, reference_variance: None };
+        let all = region_stats(&map, &pair);
+        all.into_iter().filter(|s| s.grouping == Grouping::Mesh && !s.small).map(|s| (s.name, s.ratio)).collect()
+    };
+    let (tail, four) = (ratios(&indirect(4, true)), ratios(&indirect(4, false)));
+    let show = |v: &[(String, f64)]| v.iter().map(|(n, r)| format!("{n} {r:.4}")).collect::<Vec<_>>().join("; ");
+    eprintln!("against 16 bounces: 4 and the tail: {}\n4 alone: {}", show(&tail), show(&four));
+    assert!(tail.len() >= 6, "surfaces in view: {tail:?}");
+    for ((name, with), (_, without)) in tail.iter().zip(&four) {
+        assert!((with - 1.0).abs() < 0.01, "{name}: 4 bounces and the tail give {with:.4} of 16 bounces' light");
+        assert!(*without < 0.95, "{name}: 4 bounces alone give {without:.4}: the room does not test the tail");
+    }
+}
+
 /// Issue 43: the indirect light converges as the voxels shrink. In the open-corner room the
 /// indirect light of every surface is compared with the path tracer's (full minus direct light,
-/// 1024 spp) at 32^3, 64^3 and 128^3. The first update runs 16 bounces (`gi.first_update_bounces`),
-/// so that one frame holds the converged light and what is measured is the voxels, not the
-/// bounce count: with the default 4 this room's surfaces get 0.83-0.96 of their indirect light
-/// at 128^3, with 16 0.95-1.07 (ACCURACY.md, "A room with an open corner").
+/// 1024 spp) at 32^3, 64^3 and 128^3, from one frame at the defaults: the first update's 4
+/// bounces and their tail hold the converged light (the test above), so what is measured is the
+/// voxels, not the bounce count (ACCURACY.md, "A room with an open corner").
 ///
 /// Every surface is within 0.85..1.15 at 128^3 (the issue's bound), and no surface's error
 /// grows by more than 0.05 from one resolution to the next. Measured (lavapipe): every surface
-/// 1.02-1.17 at 32^3, 0.98-1.10 at 64^3, 0.95-1.07 at 128^3. The lit wall converges (1.165,
-/// 1.102, 1.069); the others drift by about -3% per doubling, which is the light bounced more
+/// 1.02-1.17 at 32^3, 0.98-1.11 at 64^3, 0.95-1.08 at 128^3. The lit wall converges (1.171,
+/// 1.108, 1.075); the others drift by about -3% per doubling, which is the light bounced more
 /// than once (the light bounced once holds its level: 1.047, 1.040, 1.031 of the reference's
-/// over the image). So the errors of the north and east walls grow from 0.011 and 0.024 at
-/// 64^3 to 0.046 and 0.055 at 128^3: the issue's "does not grow" is not met there, and the
+/// over the image). So the errors of the north and east walls grow from 0.005 and 0.021 at
+/// 64^3 to 0.041 and 0.052 at 128^3: the issue's "does not grow" is not met there, and the
 /// 0.05 bound only catches growth like Sponza's (ACCURACY.md).
 #[test]
 fn indirect_light_converges_as_voxels_shrink() {
@@ -823,7 +859,6 @@ fn indirect_light_converges_as_voxels_shrink() {
     for res in [32u32, 64, 128] {
         let mut s = scene.clone();
         s.settings.gi.voxel_resolution = res;
-        s.settings.gi.first_update_bounces = 16;
         s.settings.view = dvsgi::scene::View::Indirect;
         let (out, _) = render(&ctx, s);
         let ind = region_stats(&map, &Pair { test: &linear(&out), reference: &truth, reference_variance: None });

@@ -15,7 +15,7 @@ use super::passes::rt_shadow::RtShadowPass;
 use super::passes::shadow::{ShadowMaps, StaticCasterCache};
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::upload::{UploadPass, Uploads};
-use super::passes::voxel_bounce::{BounceComposePass, VoxelBouncePass};
+use super::passes::voxel_bounce::{BounceComposePass, BounceTailPass, TailBuffer, TailStep, VoxelBouncePass};
 use super::passes::voxel_bricks::{BrickClearPass, BrickListPass};
 use super::passes::voxel_clear::{DynamicClearPass, VoxelClearPass};
 use super::passes::voxel_light::VoxelLightPass;
@@ -84,11 +84,23 @@ impl VoxelPasses {
         let (mips, bounces) = if let Some(shared) = shared_mips {
             let bounces = if volumes.needs.bounces > 0 {
                 let bounced = &volumes.bounced[0];
+                let buffer = TailBuffer::new(ctx, &volumes, s.gi.first_update_tail())?;
+                let tail = if s.gi.first_update_tail() {
+                    let compose = |step| BounceComposePass::new(ctx, &volumes, &buffer, step);
+                    Some(TailPasses {
+                        record: [compose(TailStep::RecordFirst)?, compose(TailStep::RecordSecond)?],
+                        gain: BounceTailPass::new(ctx, &volumes, &buffer)?,
+                        extrapolate: compose(TailStep::Extrapolate)?,
+                    })
+                } else {
+                    None
+                };
                 Some(BouncePasses {
                     from_direct: VoxelBouncePass::new(ctx, frame, &volumes, &volumes.radiance, &scene_gpu.sky)?,
                     from_bounced: VoxelBouncePass::new(ctx, frame, &volumes, bounced, &scene_gpu.sky)?,
-                    compose: BounceComposePass::new(ctx, &volumes)?,
+                    compose: BounceComposePass::new(ctx, &volumes, &buffer, TailStep::None)?,
                     mips: VoxelMipPass::new(ctx, shared, &volumes, bounced)?,
+                    tail,
                 })
             } else {
                 None
@@ -241,6 +253,17 @@ pub struct BouncePasses {
     pub from_bounced: VoxelBouncePass,
     pub compose: BounceComposePass,
     pub mips: VoxelMipPass,
+    /// Only with `gi.bounce_tail` (and feedback, and 4 or more first-update bounces).
+    pub tail: Option<TailPasses>,
+}
+
+/// The first update's bounce tail (`gi.bounce_tail`): the compose steps of its third- and
+/// second-last bounces record what each added, the gain pass takes their ratio, and the last
+/// bounce's compose adds the geometric tail of the bounces not run.
+pub struct TailPasses {
+    pub record: [BounceComposePass; 2],
+    pub gain: BounceTailPass,
+    pub extrapolate: BounceComposePass,
 }
 
 /// Per-pixel cone tracing (and the upsample when tracing at reduced resolution).
@@ -664,6 +687,9 @@ pub struct FrameState {
     /// The first bounce gathers the bounced radiance of the previous update (feedback) rather
     /// than this update's direct light.
     pub feed_back: bool,
+    /// The update adds the geometric tail of the bounces it does not run (`gi.bounce_tail`:
+    /// the first update, with feedback).
+    pub tail: bool,
     /// `async-pipelined`: the maps and the G-buffer are recorded before the voxel updates
     /// ([`FramePasses::list`]).
     pub raster_first: bool,
@@ -840,9 +866,17 @@ impl FramePasses {
             voxel_lighting.push(mips);
         }
         if let Some(b) = &v.bounces {
-            for i in 0..state.bounces {
+            let n = state.bounces;
+            // The tail needs two records after a first bounce (whose increment is all of it).
+            let tail = b.tail.as_ref().filter(|_| state.tail && !feed_back && n >= 4);
+            for i in 0..n {
                 voxel_lighting.push(if i == 0 && !feed_back { &b.from_direct } else { &b.from_bounced });
-                voxel_lighting.push(&b.compose);
+                match tail {
+                    Some(t) if i == n - 3 => voxel_lighting.push(&t.record[0]),
+                    Some(t) if i == n - 2 => voxel_lighting.push(&t.record[1]),
+                    Some(t) if i == n - 1 => voxel_lighting.extend([&t.gain as &dyn Pass, &t.extrapolate]),
+                    _ => voxel_lighting.push(&b.compose),
+                }
                 voxel_lighting.push(&b.mips);
             }
         }

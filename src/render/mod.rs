@@ -329,10 +329,8 @@ impl Renderer {
         let gi = &self.scene.settings.gi;
         // The first update has nothing to feed back: it runs enough bounces to converge.
         let feed_back = gi.bounce_feedback && self.static_voxelized;
-        let bounces = match (gi.bounce_feedback, self.static_voxelized) {
-            (true, false) => gi.bounces.max(gi.first_update_bounces),
-            _ => gi.bounces,
-        };
+        let first = gi.bounce_feedback && !self.static_voxelized;
+        let bounces = if first { gi.bounces.max(gi.first_update_bounces) } else { gi.bounces };
         FrameState {
             static_voxelized: self.static_voxelized,
             revoxelize: due,
@@ -342,6 +340,7 @@ impl Renderer {
             raster_first: self.scheduler.mode() == Mode::AsyncPipelined,
             bounces,
             feed_back,
+            tail: first && gi.first_update_tail(),
             auto_exposure: self.scene.settings.exposure_auto,
         }
     }

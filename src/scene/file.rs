@@ -388,6 +388,7 @@ pub(crate) const GI_KEYS: &[&str] = &[
     "bounces",
     "bounce_feedback",
     "first_update_bounces",
+    "bounce_tail",
     "diffuse_cones",
     "bounce_cones",
     "bounce_interleave",

@@ -654,6 +654,11 @@ pub struct GiSettings {
     /// With feedback, the bounces of the first update (when there is nothing to feed back),
     /// so that a single frame is already converged; at least `bounces`.
     pub first_update_bounces: u32,
+    /// With feedback and 4 or more first-update bounces, the first update adds the geometric
+    /// tail of the bounces it does not run: each voxel's last increment times r / (1 - r), r
+    /// the ratio of what the two bounces before it added over the whole grid, per channel
+    /// (glsl/voxel_bounce_tail.comp).
+    pub bounce_tail: bool,
     /// Diffuse cones per pixel (and per voxel in bounces, unless `bounce_cones` says
     /// otherwise): one of [`DIFFUSE_CONE_COUNTS`].
     pub diffuse_cones: u32,
@@ -744,6 +749,7 @@ impl Default for GiSettings {
             bounces: 1,
             bounce_feedback: true,
             first_update_bounces: 4,
+            bounce_tail: true,
             diffuse_cones: 16,
             bounce_cones: 0,
             bounce_interleave: 4,
@@ -776,6 +782,12 @@ impl Default for GiSettings {
 }
 
 impl GiSettings {
+    /// The first update adds the bounce tail: `bounce_tail`, with feedback and 4 or more
+    /// first-update bounces (two records after a first bounce, then the one it extrapolates).
+    pub fn first_update_tail(&self) -> bool {
+        self.bounce_tail && self.bounce_feedback && self.bounces.max(self.first_update_bounces) >= 4
+    }
+
     /// Check ranges; `Err((key, message))` names the first bad key (without the `gi.` prefix).
     pub fn validate(&self) -> Result<(), (&'static str, String)> {
         let finite = [

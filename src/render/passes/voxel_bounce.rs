@@ -1,10 +1,11 @@
 //! One light bounce in the voxels (compute): diffuse cones from the occupied voxels (the work
 //! list's entries, one in `gi.bounce_interleave` static voxels per feedback update) through a
 //! radiance volume and its directional mips, the reflected light written to the scratch
-//! volume; then the bounced radiance: direct plus that indirect light, per occupied voxel.
+//! volume; then the bounced radiance: direct plus that indirect light, per occupied voxel;
+//! and in the first update, the geometric tail of the bounces it does not run (`gi.bounce_tail`).
 
 use super::voxel_list::{dispatch_list, list_arguments, StaleZero};
-use crate::gpu::{shaders, Access, Bind, Context, GpuResult, Image, Pipeline};
+use crate::gpu::{shaders, Access, Bind, Buffer, Context, GpuResult, Image, Pipeline};
 use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, QueueKind, Use};
 use crate::render::sky::SkyGpu;
@@ -72,44 +73,83 @@ impl Pass for VoxelBouncePass {
     }
 }
 
+/// What a compose step does for the first update's bounce tail (`gi.bounce_tail`;
+/// glsl/voxel_bounce_compose.comp): nothing, record what its bounce added (per workgroup, for
+/// the ratio), or add the geometric tail of the bounces not run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TailStep {
+    None = 0,
+    RecordFirst = 1,
+    RecordSecond = 2,
+    Extrapolate = 3,
+}
+
+/// The bounce tail's storage (`BounceTailBlock` in glsl/include/bounce_tail.glsl): the gain and
+/// ratio (two vec4), then two records of one vec4 per workgroup of a list dispatch.
+pub struct TailBuffer {
+    pub buffer: Arc<Buffer>,
+    /// Workgroups per record: as many as a dispatch over a full list has (`list_range`).
+    pub groups: u32,
+}
+
+impl TailBuffer {
+    /// Records sized for a full list where the tail is `used`, else a placeholder for the
+    /// compose steps that do not touch it.
+    pub fn new(ctx: &Arc<Context>, volumes: &VoxelVolumes, used: bool) -> GpuResult<TailBuffer> {
+        const GROUP: u64 = 64; // VOXEL_LIST_GROUP
+        const GROUPS_X: u64 = 32768; // VOXEL_LIST_GROUPS_X
+        let groups = if used { volumes.list.capacity.div_ceil(GROUP).max(1) } else { 1 };
+        let dispatched = groups.min(GROUPS_X) * groups.div_ceil(GROUPS_X);
+        let groups = u32::try_from(dispatched).unwrap_or(u32::MAX);
+        let size = 32 + 2 * 16 * u64::from(groups);
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let buffer = Buffer::new(ctx, "voxel bounce tail", size, usage, gpu_allocator::MemoryLocation::GpuOnly)?;
+        Ok(TailBuffer { buffer: Arc::new(buffer), groups })
+    }
+}
+
 /// The bounced radiance of every occupied voxel: its direct radiance plus the indirect light
 /// in the scratch volume (stale voxels zeroed). The next bounce, the directional mips and the
-/// cones read it.
+/// cones read it. `step` says what it does for the bounce tail.
 pub struct BounceComposePass {
+    name: &'static str,
     volumes: Arc<VoxelVolumes>,
     pipeline: Pipeline,
     set: PassSet,
     stale: Option<StaleZero>,
+    push: [u32; 2],
 }
 
 impl BounceComposePass {
-    pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>) -> GpuResult<Self> {
+    pub fn new(ctx: &Arc<Context>, volumes: &Arc<VoxelVolumes>, tail: &TailBuffer, step: TailStep) -> GpuResult<Self> {
         let v = volumes;
         let read = Access::ComputeShaderReadStorage;
+        let name = match step {
+            TailStep::None => "voxel bounce compose",
+            TailStep::RecordFirst => "voxel bounce compose (tail: first record)",
+            TailStep::RecordSecond => "voxel bounce compose (tail: second record)",
+            TailStep::Extrapolate => "voxel bounce compose (tail: extrapolated)",
+        };
+        // The scratch and the bounced radiance are read and written (the tail reads what the
+        // last bounce left and extrapolates both).
         let set = Binds::new()
             .storage(&v.list.buffer, Access::ComputeShaderReadBuffer)
             .storage_image(&v.radiance, read)
-            .storage_image(&v.bounced[1], read)
+            .storage_image(&v.bounced[1], Access::ComputeShaderWrite)
             .storage_image(&v.bounced[0], Access::ComputeShaderWrite)
             .loaded(Bind::Uniform(&v.grid_buffer))
             .extend(v.brick_maps(read))
-            .build(ctx, "voxel bounce compose", vk::ShaderStageFlags::COMPUTE)?;
-        let pipeline = Pipeline::compute(
-            ctx,
-            "voxel bounce compose",
-            shaders::VOXEL_BOUNCE_COMPOSE_COMP,
-            &[set.layout()],
-            0,
-            &[],
-        )?;
+            .storage(&tail.buffer, Access::ComputeShaderWrite)
+            .build(ctx, name, vk::ShaderStageFlags::COMPUTE)?;
+        let pipeline = Pipeline::compute(ctx, name, shaders::VOXEL_BOUNCE_COMPOSE_COMP, &[set.layout()], 8, &[])?;
         let stale = StaleZero::new(ctx, volumes, &volumes.bounced[0])?;
-        Ok(BounceComposePass { volumes: volumes.clone(), pipeline, set, stale })
+        Ok(BounceComposePass { name, volumes: volumes.clone(), pipeline, set, stale, push: [step as u32, tail.groups] })
     }
 }
 
 impl Pass for BounceComposePass {
     fn name(&self) -> &str {
-        "voxel bounce compose"
+        self.name
     }
     fn sets(&self) -> Vec<&PassSet> {
         std::iter::once(&self.set).chain(self.stale.as_ref().map(StaleZero::set)).collect()
@@ -125,6 +165,44 @@ impl Pass for BounceComposePass {
             stale.record(ctx, cmd, &self.volumes);
         }
         self.pipeline.bind(cmd, &[self.set.raw()]);
+        self.pipeline.push(cmd, &self.push);
         dispatch_list(&self.pipeline, cmd, &self.volumes, work_list_header::OCCUPIED);
+    }
+}
+
+/// The bounce tail's gain (glsl/voxel_bounce_tail.comp): the ratio of the two records' sums
+/// over every voxel, per channel, and r / (1 - r), summed by one workgroup in a fixed order.
+pub struct BounceTailPass {
+    pipeline: Pipeline,
+    set: PassSet,
+    groups: u32,
+}
+
+impl BounceTailPass {
+    pub fn new(ctx: &Arc<Context>, volumes: &VoxelVolumes, tail: &TailBuffer) -> GpuResult<Self> {
+        let set = Binds::new()
+            .storage(&volumes.list.buffer, Access::ComputeShaderReadBuffer)
+            .storage(&tail.buffer, Access::ComputeShaderWrite)
+            .build(ctx, "voxel bounce tail", vk::ShaderStageFlags::COMPUTE)?;
+        let pipeline =
+            Pipeline::compute(ctx, "voxel bounce tail", shaders::VOXEL_BOUNCE_TAIL_COMP, &[set.layout()], 4, &[])?;
+        Ok(BounceTailPass { pipeline, set, groups: tail.groups })
+    }
+}
+
+impl Pass for BounceTailPass {
+    fn name(&self) -> &str {
+        "voxel bounce tail"
+    }
+    fn sets(&self) -> Vec<&PassSet> {
+        vec![&self.set]
+    }
+    fn queue(&self) -> QueueKind {
+        QueueKind::Compute
+    }
+    fn record(&self, _ctx: &Context, cmd: vk::CommandBuffer) {
+        self.pipeline.bind(cmd, &[self.set.raw()]);
+        self.pipeline.push(cmd, &self.groups);
+        self.pipeline.dispatch(cmd, [1, 1, 1], [1, 1, 1]);
     }
 }
