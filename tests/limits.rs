@@ -78,8 +78,8 @@ fn memory_estimate_matches_what_is_allocated() {
 }
 
 /// The voxel volumes' estimate is exactly what the renderer allocates for them, byte for byte,
-/// in both layouts and with every optional volume (emission, static flags, bounces, pooled
-/// directional levels): the estimate lists the allocations without creating them, and this is
+/// in both layouts and with every optional volume (emission, static flags, bounces and their
+/// tail's records, pooled directional levels): the estimate lists the allocations without creating them, and this is
 /// what keeps that list and `VoxelVolumes::new` from drifting apart.
 #[test]
 fn voxel_volume_estimate_is_exactly_what_is_allocated() {
@@ -104,7 +104,8 @@ fn voxel_volume_estimate_is_exactly_what_is_allocated() {
         let r = Renderer::new(&ctx, scene).unwrap();
         let v = r.voxels().expect("voxels");
         let images: u64 = v.all().into_iter().chain(&v.flags_placeholder).map(|i| i.bytes).sum();
-        let buffers = v.list.bytes() + v.scan.size + v.bricks.as_ref().map_or(0, |b| b.lists.size);
+        let tail = v.bounce_tail.as_ref().map_or(0, |t| t.buffer.size);
+        let buffers = v.list.bytes() + v.scan.size + v.bricks.as_ref().map_or(0, |b| b.lists.size) + tail;
         assert_eq!(estimate, images + buffers, "{file} at {res}^3, {layout}");
     }
     assert_no_validation_messages(&ctx);

@@ -805,6 +805,9 @@ fn print_scene(common: &CommonArgs, ctx: &std::sync::Arc<Context>, scene: dvsgi:
     if let Some(v) = renderer.voxels() {
         outln!("  buffer voxel work lists: {:.2} MiB", v.list.bytes() as f64 / (1024.0 * 1024.0));
         outln!("  buffer voxel scan: {:.2} MiB", v.scan.size as f64 / (1024.0 * 1024.0));
+        if let Some(t) = &v.bounce_tail {
+            outln!("  buffer voxel bounce tail: {:.2} MiB", t.buffer.size as f64 / (1024.0 * 1024.0));
+        }
     }
     outln!(
         "  textures: {} with mip chains, {:.2} MiB (anisotropic filtering {}x)",

@@ -272,8 +272,9 @@ mod tests {
         // work list's 64-byte header (no triangles: no entries), the four 1^3 placeholders
         // (R32_UINT for the brick maps' writers and readers, RGBA16F, R8_UINT), the
         // voxelization's eight sums (a count, albedo, normal and the surface's offset) 8 x 2048
-        // and the scan buffer (a 16-word header and one 8^3 brick).
-        assert_eq!(e.volumes, 2 * 2048 + 4096 + 2 * 4096 + 6 * 73 * 8 + 64 + 2 * 4 + 8 + 1 + 8 * 2048 + 4 * 17);
+        // the scan buffer (a 16-word header and one 8^3 brick) and the first update's bounce tail
+        // (its gain and ratio, and two records of the one workgroup an empty list dispatches).
+        assert_eq!(e.volumes, 2 * 2048 + 4096 + 2 * 4096 + 6 * 73 * 8 + 64 + 2 * 4 + 8 + 1 + 8 * 2048 + 4 * 17 + 64);
         assert_eq!(e.largest_volume, 4096);
         assert_eq!(e.targets, 100 * 40 + 100 * 8, "G-buffer (no emission), radiance, display, diffuse cones");
         scene.settings.gi.mode = GiMode::None;

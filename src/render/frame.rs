@@ -15,7 +15,7 @@ use super::passes::rt_shadow::RtShadowPass;
 use super::passes::shadow::{ShadowMaps, StaticCasterCache};
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::upload::{UploadPass, Uploads};
-use super::passes::voxel_bounce::{BounceComposePass, BounceTailPass, TailBuffer, TailStep, VoxelBouncePass};
+use super::passes::voxel_bounce::{BounceComposePass, BounceTailPass, TailStep, VoxelBouncePass};
 use super::passes::voxel_bricks::{BrickClearPass, BrickListPass};
 use super::passes::voxel_clear::{DynamicClearPass, VoxelClearPass};
 use super::passes::voxel_light::VoxelLightPass;
@@ -82,29 +82,7 @@ impl VoxelPasses {
             None
         };
         let (mips, bounces) = if let Some(shared) = shared_mips {
-            let bounces = if volumes.needs.bounces > 0 {
-                let bounced = &volumes.bounced[0];
-                let buffer = TailBuffer::new(ctx, &volumes, s.gi.first_update_tail())?;
-                let tail = if s.gi.first_update_tail() {
-                    let compose = |step| BounceComposePass::new(ctx, &volumes, &buffer, step);
-                    Some(TailPasses {
-                        record: [compose(TailStep::RecordFirst)?, compose(TailStep::RecordSecond)?],
-                        gain: BounceTailPass::new(ctx, &volumes, &buffer)?,
-                        extrapolate: compose(TailStep::Extrapolate)?,
-                    })
-                } else {
-                    None
-                };
-                Some(BouncePasses {
-                    from_direct: VoxelBouncePass::new(ctx, frame, &volumes, &volumes.radiance, &scene_gpu.sky)?,
-                    from_bounced: VoxelBouncePass::new(ctx, frame, &volumes, bounced, &scene_gpu.sky)?,
-                    compose: BounceComposePass::new(ctx, &volumes, &buffer, TailStep::None)?,
-                    mips: VoxelMipPass::new(ctx, shared, &volumes, bounced)?,
-                    tail,
-                })
-            } else {
-                None
-            };
+            let bounces = BouncePasses::new(ctx, frame, &volumes, shared, &scene_gpu.sky)?;
             (Some(VoxelMipPass::new(ctx, shared, &volumes, &volumes.radiance)?), bounces)
         } else {
             (None, None)
@@ -255,6 +233,38 @@ pub struct BouncePasses {
     pub mips: VoxelMipPass,
     /// Only with `gi.bounce_tail` (and feedback, and 4 or more first-update bounces).
     pub tail: Option<TailPasses>,
+}
+
+impl BouncePasses {
+    /// The bounce steps over `volumes` (None without bounces), with the first update's tail
+    /// where the volumes have its records.
+    fn new(
+        ctx: &Arc<Context>,
+        frame: &FrameBuffers,
+        volumes: &Arc<VoxelVolumes>,
+        shared: &Arc<VoxelMips>,
+        sky: &super::sky::SkyGpu,
+    ) -> GpuResult<Option<BouncePasses>> {
+        let (true, Some(buffer)) = (volumes.needs.bounces > 0, &volumes.bounce_tail) else { return Ok(None) };
+        let bounced = &volumes.bounced[0];
+        let compose = |step| BounceComposePass::new(ctx, volumes, buffer, step);
+        let tail = if volumes.needs.bounce_tail {
+            Some(TailPasses {
+                record: [compose(TailStep::RecordFirst)?, compose(TailStep::RecordSecond)?],
+                gain: BounceTailPass::new(ctx, volumes, buffer)?,
+                extrapolate: compose(TailStep::Extrapolate)?,
+            })
+        } else {
+            None
+        };
+        Ok(Some(BouncePasses {
+            from_direct: VoxelBouncePass::new(ctx, frame, volumes, &volumes.radiance, sky)?,
+            from_bounced: VoxelBouncePass::new(ctx, frame, volumes, bounced, sky)?,
+            compose: compose(TailStep::None)?,
+            mips: VoxelMipPass::new(ctx, shared, volumes, bounced)?,
+            tail,
+        }))
+    }
 }
 
 /// The first update's bounce tail (`gi.bounce_tail`): the compose steps of its third- and

@@ -116,7 +116,8 @@ impl Renderer {
     pub fn voxel_memory(&mut self) -> GpuResult<Option<bricks::VoxelMemory>> {
         let Some(v) = self.passes().voxels.as_ref().map(|v| v.volumes.clone()) else { return Ok(None) };
         let images: u64 = v.all().iter().map(|i| i.bytes).sum();
-        let lists = v.list.bytes() + v.bricks.as_ref().map_or(0, |b| b.lists.size);
+        let tail = v.bounce_tail.as_ref().map_or(0, |t| t.buffer.size);
+        let lists = v.list.bytes() + v.bricks.as_ref().map_or(0, |b| b.lists.size) + tail;
         let dense_bytes = budget::Estimate::on_layout(&self.ctx, &self.scene, crate::scene::VoxelLayout::Dense).volumes;
         let full: u64 = v.full_resolution().iter().map(|i| i.bytes).sum();
         let pool_bytes: Vec<u64> = std::iter::once(full)

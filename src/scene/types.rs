@@ -782,10 +782,10 @@ impl Default for GiSettings {
 }
 
 impl GiSettings {
-    /// The first update adds the bounce tail: `bounce_tail`, with feedback and 4 or more
-    /// first-update bounces (two records after a first bounce, then the one it extrapolates).
+    /// The first update adds the bounce tail: `bounce_tail`, with bounces and feedback and 4 or
+    /// more first-update bounces (two records after a first bounce, then the one it extrapolates).
     pub fn first_update_tail(&self) -> bool {
-        self.bounce_tail && self.bounce_feedback && self.bounces.max(self.first_update_bounces) >= 4
+        self.bounce_tail && self.bounces > 0 && self.bounce_feedback && self.bounces.max(self.first_update_bounces) >= 4
     }
 
     /// Check ranges; `Err((key, message))` names the first bad key (without the `gi.` prefix).

@@ -5,11 +5,11 @@
 //! and in the first update, the geometric tail of the bounces it does not run (`gi.bounce_tail`).
 
 use super::voxel_list::{dispatch_list, list_arguments, StaleZero};
-use crate::gpu::{shaders, Access, Bind, Buffer, Context, GpuResult, Image, Pipeline};
+use crate::gpu::{shaders, Access, Bind, Context, GpuResult, Image, Pipeline};
 use crate::render::binding::{Binds, PassSet};
 use crate::render::graph::{Pass, QueueKind, Use};
 use crate::render::sky::SkyGpu;
-use crate::render::voxel::{work_list_header, VoxelVolumes};
+use crate::render::voxel::{work_list_header, TailBuffer, VoxelVolumes};
 use crate::render::FrameBuffers;
 use ash::vk;
 use std::sync::Arc;
@@ -82,30 +82,6 @@ pub enum TailStep {
     RecordFirst = 1,
     RecordSecond = 2,
     Extrapolate = 3,
-}
-
-/// The bounce tail's storage (`BounceTailBlock` in glsl/include/bounce_tail.glsl): the gain and
-/// ratio (two vec4), then two records of one vec4 per workgroup of a list dispatch.
-pub struct TailBuffer {
-    pub buffer: Arc<Buffer>,
-    /// Workgroups per record: as many as a dispatch over a full list has (`list_range`).
-    pub groups: u32,
-}
-
-impl TailBuffer {
-    /// Records sized for a full list where the tail is `used`, else a placeholder for the
-    /// compose steps that do not touch it.
-    pub fn new(ctx: &Arc<Context>, volumes: &VoxelVolumes, used: bool) -> GpuResult<TailBuffer> {
-        const GROUP: u64 = 64; // VOXEL_LIST_GROUP
-        const GROUPS_X: u64 = 32768; // VOXEL_LIST_GROUPS_X
-        let groups = if used { volumes.list.capacity.div_ceil(GROUP).max(1) } else { 1 };
-        let dispatched = groups.min(GROUPS_X) * groups.div_ceil(GROUPS_X);
-        let groups = u32::try_from(dispatched).unwrap_or(u32::MAX);
-        let size = 32 + 2 * 16 * u64::from(groups);
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let buffer = Buffer::new(ctx, "voxel bounce tail", size, usage, gpu_allocator::MemoryLocation::GpuOnly)?;
-        Ok(TailBuffer { buffer: Arc::new(buffer), groups })
-    }
 }
 
 /// The bounced radiance of every occupied voxel: its direct radiance plus the indirect light

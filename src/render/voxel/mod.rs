@@ -81,6 +81,8 @@ pub struct VoxelNeeds {
     /// `gi.voxel_cover = "area"` or `"directional"`: the voxelization sums each voxel's cover
     /// (one more word).
     pub area_cover: bool,
+    /// The first update adds the bounce tail (`GiSettings::first_update_tail`): its records.
+    pub bounce_tail: bool,
 }
 
 impl VoxelNeeds {
@@ -110,8 +112,17 @@ impl VoxelNeeds {
             two_tap: cones && scene.settings.gi.cone_filter == ConeFilter::TwoTap,
             layers: cones && scene.settings.gi.opacity == Opacity::Layers,
             area_cover: scene.settings.gi.voxel_cover != VoxelCover::Touch,
+            bounce_tail: cones && scene.settings.gi.first_update_tail(),
         }
     }
+}
+
+/// The first update's bounce tail (`BounceTailBlock` in glsl/include/bounce_tail.glsl): the
+/// gain and the ratio (two vec4), then two records of one vec4 per workgroup of a list dispatch.
+pub struct TailBuffer {
+    pub buffer: Arc<Buffer>,
+    /// Workgroups per record ([`specs::tail_groups`]; 1 where the tail is not used).
+    pub groups: u32,
 }
 
 /// The voxel volumes (R32_UINT: RGB8 + 8-bit count, see voxel.glsl) and the grid uniform.
@@ -131,6 +142,8 @@ pub struct VoxelVolumes {
     /// volume each bounce writes before it is copied into the first (a bounce samples the
     /// previous result while it runs). Empty without bounces.
     pub bounced: Vec<Arc<Image>>,
+    /// With bounces: the first update's bounce tail (records only with `needs.bounce_tail`).
+    pub bounce_tail: Option<TailBuffer>,
     /// The six directional volumes (+x, -x, +y, -y, +z, -z) at half resolution with full mip
     /// chains, built from the final radiance; only when cones are traced.
     pub directional: Vec<Arc<Image>>,
@@ -305,6 +318,14 @@ impl VoxelList {
     }
 }
 
+/// The bounce tail's buffer as `alloc` sizes it.
+fn tail_buffer(ctx: &Arc<Context>, alloc: Alloc, needs: &VoxelNeeds, list_capacity: u64) -> GpuResult<TailBuffer> {
+    let groups = if needs.bounce_tail { specs::tail_groups(list_capacity) } else { 1 };
+    let gpu = gpu_allocator::MemoryLocation::GpuOnly;
+    let buffer = Buffer::new(ctx, "voxel bounce tail", alloc.size(), vk::BufferUsageFlags::STORAGE_BUFFER, gpu)?;
+    Ok(TailBuffer { buffer: Arc::new(buffer), groups })
+}
+
 impl VoxelVolumes {
     pub fn new(ctx: &Arc<Context>, scene: &Scene, needs: VoxelNeeds) -> GpuResult<VoxelVolumes> {
         check_voxel_features(ctx)?;
@@ -328,6 +349,7 @@ impl VoxelVolumes {
             [b, scratch] => vec![image("voxel radiance bounced", b)?, image("voxel bounce scratch", scratch)?],
             _ => Vec::new(),
         };
+        let bounce_tail = specs.tail.map(|a| tail_buffer(ctx, a, &needs, capacity.list)).transpose()?;
         let (gi_params, bounce_params) = gi_uniforms(ctx, scene, &grid, mip_levels)?;
         let sum_scale = sum_scale(scene);
         let emission_scale = scene.materials.iter().map(|m| m.emission.max_element()).fold(0.0f32, f32::max).max(1e-6);
@@ -354,6 +376,7 @@ impl VoxelVolumes {
             albedo: image("voxel albedo", &specs.albedo)?,
             radiance: image("voxel radiance", &specs.radiance)?,
             bounced,
+            bounce_tail,
             directional,
             gi_params,
             bounce_params,

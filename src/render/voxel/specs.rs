@@ -83,9 +83,21 @@ pub struct VolumeSpecs {
     /// dynamic objects, the stale list.
     pub list: Alloc,
     pub stale: Option<Alloc>,
+    /// With bounces: the first update's bounce tail (its records only with the tail).
+    pub tail: Option<Alloc>,
     /// The 1^3 stand-ins bound where a map or a pooled level does not exist.
     pub map_placeholder: Alloc,
     pub pool_placeholder: Alloc,
+}
+
+/// Workgroups per record of the first update's bounce tail (glsl/include/bounce_tail.glsl): as
+/// many as a dispatch over a full work list of `list_capacity` entries has (`list_range` in
+/// glsl/include/voxel_list.glsl: 64 invocations a group, at most 32768 groups along x).
+pub fn tail_groups(list_capacity: u64) -> u32 {
+    const GROUP: u64 = 64;
+    const GROUPS_X: u64 = 32768;
+    let groups = list_capacity.div_ceil(GROUP).max(1);
+    u32::try_from(groups.min(GROUPS_X) * groups.div_ceil(GROUPS_X)).unwrap_or(u32::MAX)
 }
 
 impl VolumeSpecs {
@@ -124,6 +136,10 @@ impl VolumeSpecs {
             scan: Alloc::Buffer(4 * ScanLayout::new(res, layout).words),
             list: Alloc::Buffer(work_list_header::SIZE + 4 * list_capacity),
             stale: needs.dynamic.then(|| Alloc::Buffer(4 * list_capacity.max(1))),
+            tail: (needs.bounces > 0).then(|| {
+                let groups = if needs.bounce_tail { tail_groups(list_capacity) } else { 1 };
+                Alloc::Buffer(32 + 32 * u64::from(groups))
+            }),
             map_placeholder: placeholder(F::R32_UINT, false),
             pool_placeholder: placeholder(RADIANCE_VOLUME_FORMAT, true),
         }
@@ -144,6 +160,7 @@ impl VolumeSpecs {
         out.extend(self.brick_lists);
         out.extend([self.scan, self.list]);
         out.extend(self.stale);
+        out.extend(self.tail);
         // The map placeholder twice: one for the passes that write, one for those that read.
         out.extend([self.map_placeholder, self.map_placeholder, self.pool_placeholder]);
         out
