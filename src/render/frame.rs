@@ -877,8 +877,9 @@ impl FramePasses {
         }
         if let Some(b) = &v.bounces {
             let n = state.bounces;
-            // The tail needs two records after a first bounce (whose increment is all of it).
-            let tail = b.tail.as_ref().filter(|_| state.tail && !feed_back && n >= 4);
+            // The tail needs two records after a first bounce (whose increment is all of it);
+            // `state.tail` implies it, the bound keeps the indices below from wrapping.
+            let tail = b.tail.as_ref().filter(|_| state.tail && n >= 4);
             for i in 0..n {
                 voxel_lighting.push(if i == 0 && !feed_back { &b.from_direct } else { &b.from_bounced });
                 match tail {

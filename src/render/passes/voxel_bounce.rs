@@ -106,16 +106,20 @@ impl BounceComposePass {
             TailStep::RecordSecond => "voxel bounce compose (tail: second record)",
             TailStep::Extrapolate => "voxel bounce compose (tail: extrapolated)",
         };
-        // The scratch and the bounced radiance are read and written (the tail reads what the
-        // last bounce left and extrapolates both).
+        // Every step writes the bounced radiance (the tail's steps read what the last bounce
+        // left there first); the extrapolation also writes the scratch; the records write the
+        // tail buffer, which the extrapolation reads and the plain step leaves alone.
+        let (write, buffer) = (Access::ComputeShaderWrite, Access::ComputeShaderReadBuffer);
+        let scratch = if step == TailStep::Extrapolate { write } else { read };
+        let records = if matches!(step, TailStep::RecordFirst | TailStep::RecordSecond) { write } else { buffer };
         let set = Binds::new()
-            .storage(&v.list.buffer, Access::ComputeShaderReadBuffer)
+            .storage(&v.list.buffer, buffer)
             .storage_image(&v.radiance, read)
-            .storage_image(&v.bounced[1], Access::ComputeShaderWrite)
-            .storage_image(&v.bounced[0], Access::ComputeShaderWrite)
+            .storage_image(&v.bounced[1], scratch)
+            .storage_image(&v.bounced[0], write)
             .loaded(Bind::Uniform(&v.grid_buffer))
             .extend(v.brick_maps(read))
-            .storage(&tail.buffer, Access::ComputeShaderWrite)
+            .storage(&tail.buffer, records)
             .build(ctx, name, vk::ShaderStageFlags::COMPUTE)?;
         let pipeline = Pipeline::compute(ctx, name, shaders::VOXEL_BOUNCE_COMPOSE_COMP, &[set.layout()], 8, &[])?;
         let stale = StaleZero::new(ctx, volumes, &volumes.bounced[0])?;
