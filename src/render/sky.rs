@@ -19,7 +19,7 @@
 use crate::gpu::{Bind, Buffer, Context, GpuResult, Image, Sampler};
 use crate::render::binding::Binds;
 use crate::render::scene_gpu::{upload_buffer, upload_levels};
-use crate::scene::{equirect_dir, gradient, GiMode, Scene, Sky, SkyKind, SpecularSource};
+use crate::scene::{equirect_dir, gradient, GiMode, Opacity, Scene, Sky, SkyKind, SpecularSource};
 use ash::vk;
 use glam::{DVec3, Vec3};
 use std::f64::consts::PI;
@@ -42,9 +42,16 @@ pub fn sky_use(scene: &Scene) -> Option<String> {
         GiMode::Vct => {
             let rays =
                 if gi.specular == SpecularSource::Rt { "; ray-traced reflections see it where they miss" } else { "" };
+            let leak = if gi.opacity == Opacity::Blend {
+                "; with gi.opacity = \"blend\" a closed room under it gets about a quarter of the light it would \
+                 with its roof open (gi.opacity = \"layers\" with gi.voxel_cover = \"directional\": 0.024; \
+                 ACCURACY.md, \"Sky light and leaks\")"
+            } else {
+                ""
+            };
             format!(
                 "lights the scene: cones that leave the voxel grid see it through what they crossed, filtered to \
-                 their aperture (diffuse, specular and the voxels' bounce, so it bounces){rays}"
+                 their aperture (diffuse, specular and the voxels' bounce, so it bounces){rays}{leak}"
             )
         }
         GiMode::None => "background only: gi.mode = \"none\" has no indirect light, and sky light is only \
@@ -424,6 +431,18 @@ mod tests {
             }
         }
         (s / w).as_vec3()
+    }
+
+    #[test]
+    fn info_names_the_leak_of_blend_and_its_remedy_under_a_sky() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/leak/sealed-room-t2.toml");
+        let load = |overrides: Vec<(String, String)>| {
+            crate::scene::load(&path, &crate::scene::LoadOptions { overrides, asset_paths: Vec::new() }).unwrap()
+        };
+        let blend = sky_use(&load(Vec::new())).unwrap();
+        assert!(blend.contains("gi.opacity = \"layers\" with gi.voxel_cover = \"directional\""), "{blend}");
+        let layers = sky_use(&load(vec![("gi.opacity".into(), "\"layers\"".into())])).unwrap();
+        assert!(layers.starts_with("sky gradient") && !layers.contains("quarter"), "{layers}");
     }
 
     #[test]
