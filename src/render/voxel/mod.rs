@@ -320,7 +320,7 @@ impl VoxelList {
 
 /// The bounce tail's buffer as `alloc` sizes it.
 fn tail_buffer(ctx: &Arc<Context>, alloc: Alloc, needs: &VoxelNeeds, list_capacity: u64) -> GpuResult<TailBuffer> {
-    let groups = if needs.bounce_tail { specs::tail_groups(list_capacity) } else { 1 };
+    let groups = specs::tail_groups(needs, list_capacity);
     let gpu = gpu_allocator::MemoryLocation::GpuOnly;
     let buffer = Buffer::new(ctx, "voxel bounce tail", alloc.size(), vk::BufferUsageFlags::STORAGE_BUFFER, gpu)?;
     Ok(TailBuffer { buffer: Arc::new(buffer), groups })

@@ -90,12 +90,16 @@ pub struct VolumeSpecs {
     pub pool_placeholder: Alloc,
 }
 
-/// Workgroups per record of the first update's bounce tail (glsl/include/bounce_tail.glsl): as
-/// many as a dispatch over a full work list of `list_capacity` entries has (`list_range` in
-/// glsl/include/voxel_list.glsl: 64 invocations a group, at most 32768 groups along x).
-pub fn tail_groups(list_capacity: u64) -> u32 {
+/// Workgroups per record of the first update's bounce tail (glsl/include/bounce_tail.glsl): with
+/// the tail, as many as a dispatch over a full work list of `list_capacity` entries has
+/// (`list_range` in glsl/include/voxel_list.glsl: 64 invocations a group, at most 32768 groups
+/// along x); without it, one, for the compose steps that bind the buffer and leave it alone.
+pub fn tail_groups(needs: &VoxelNeeds, list_capacity: u64) -> u32 {
     const GROUP: u64 = 64;
     const GROUPS_X: u64 = 32768;
+    if !needs.bounce_tail {
+        return 1;
+    }
     let groups = list_capacity.div_ceil(GROUP).max(1);
     u32::try_from(groups.min(GROUPS_X) * groups.div_ceil(GROUPS_X)).unwrap_or(u32::MAX)
 }
@@ -136,10 +140,7 @@ impl VolumeSpecs {
             scan: Alloc::Buffer(4 * ScanLayout::new(res, layout).words),
             list: Alloc::Buffer(work_list_header::SIZE + 4 * list_capacity),
             stale: needs.dynamic.then(|| Alloc::Buffer(4 * list_capacity.max(1))),
-            tail: (needs.bounces > 0).then(|| {
-                let groups = if needs.bounce_tail { tail_groups(list_capacity) } else { 1 };
-                Alloc::Buffer(32 + 32 * u64::from(groups))
-            }),
+            tail: (needs.bounces > 0).then(|| Alloc::Buffer(32 + 32 * u64::from(tail_groups(needs, list_capacity)))),
             map_placeholder: placeholder(F::R32_UINT, false),
             pool_placeholder: placeholder(RADIANCE_VOLUME_FORMAT, true),
         }
