@@ -221,6 +221,11 @@ fn compare_reports_error_per_region() {
         1,
     );
     assert!(t3.contains("small.exr") && t3.contains("1x1"), "{t3}");
+    // Under a sky the renderer's indirect light holds the sky's: the split is named.
+    assert!(!o.contains("has a sky"), "no sky, no note:\n{o}");
+    let sky = ["compare", &path(&t), &path(&r), "--scene", "scenes/leak/window-room.toml", "--ref-direct", &path(&d)];
+    let o = ok(&dvsgi(&sky));
+    assert!(o.contains("has a sky") && o.contains("sky.type"), "{o}");
 }
 
 #[test]

@@ -160,8 +160,9 @@ The viewer exits at the end of the script; each script frame advances scene time
         /// the error per region (object, mesh, material, and mesh × facing).
         #[arg(long)]
         scene: Option<PathBuf>,
-        /// The reference's direct light alone (`dvsgi reference --bounces 0`): also report the
-        /// indirect light (reference − this) per region. Needs --scene.
+        /// The reference's direct light alone (`dvsgi reference --bounces 0`; under a sky, with
+        /// `--set sky.type='"none"'`: the renderer's indirect light holds the sky's): also report
+        /// the indirect light (reference − this) per region. Needs --scene.
         #[arg(long, requires = "scene")]
         ref_direct: Option<PathBuf>,
         /// The test image's indirect light (`dvsgi render --view indirect`); without it the
@@ -514,6 +515,9 @@ fn compare_regions(
     print_regions("regions (test / reference mean radiance)", &regions);
     let indirect = match &args.ref_direct {
         Some(rd) => {
+            if scene.sky.is_some() {
+                eprintln!("{}", sky_split_note("--ref-direct"));
+            }
             let rd = read(rd, "the reference's direct light")?;
             let ti = args.test_indirect.as_deref().map(|p| read(p, "the test's indirect light")).transpose()?;
             let (ti, ri) = indirect_pair(t, r, &rd, ti.as_ref());
@@ -529,6 +533,19 @@ fn compare_regions(
         args.ratio.as_deref().map(|p| dvsgi::output::encode_png(p, &ratio_picture(&map, pt, pr, 1.0))).transpose()?;
     let indirect = indirect.map(|(stats, _, _)| stats);
     Ok((RegionReport { regions, indirect }, png))
+}
+
+/// The renderer's indirect light (`render --view indirect`) holds the sky's light, which its
+/// cones gather, while `reference --bounces 0` counts the sky's light as direct: under a sky,
+/// the indirect light of `compare --ref-direct` is the renderer's only when the direct light
+/// was rendered without the sky (ACCURACY.md, "Sponza under a sky"). `compare` notes it; so
+/// does `reference --bounces 0`, where such an image is made.
+fn sky_split_note(what: &str) -> String {
+    format!(
+        "note: the scene has a sky, whose light the renderer counts as indirect (its cones gather it): {what} \
+         should hold the lights' direct light alone, `dvsgi reference SCENE --bounces 0 --set sky.type='\"none\"'`; \
+         with the sky in it, the reference's indirect light lacks the sky's direct light and the ratios come out too high"
+    )
 }
 
 fn print_regions(title: &str, stats: &[dvsgi::regions::RegionStats]) {
@@ -627,6 +644,9 @@ fn reference(
     }
     dvsgi::output::check_targets(&targets.iter().map(|(p, _)| p.clone()).collect::<Vec<_>>())?;
     let scene = common.load_scene(scene, &extra)?;
+    if options.max_bounces == Some(0) && scene.sky.is_some() {
+        eprintln!("{}", sky_split_note("an image for `compare --ref-direct`"));
+    }
     let ctx = common.context()?;
     let start = std::time::Instant::now();
     let mut tracer = dvsgi::reference::PathTracer::new(&ctx, &scene, options)?;
