@@ -21,8 +21,9 @@ impl Preset {
         // apertures, AO off, and the bounce gathered by one in 4 static voxels per update
         // everywhere. The voxel light's attenuation: the mean normal's cosine, exact for a
         // voxel one plane crosses, except at 64^3, where most of Sponza's voxels hold several
-        // faces and the per-axis rule's excess makes up for the light the cosine of their mean
-        // normal misses (Sponza's FLIP 0.175 against 0.200 with `medium`, ACCURACY.md).
+        // faces: the cosine of their mean normal misses the lit faces' light, which the
+        // per-axis rule (their average, for faces along the axes) keeps (Sponza's FLIP 0.175
+        // against 0.200 with `medium`, ACCURACY.md).
         let (voxels, cones, bounces, downsample, attenuation) = match self {
             Preset::Low => ("32", "4", "1", "2", "\"n-dot-l\""),
             Preset::Medium => ("64", "9", "1", "2", "\"normal-weighted\""),

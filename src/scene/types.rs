@@ -445,10 +445,11 @@ impl View {
 #[serde(rename_all = "kebab-case")]
 pub enum VoxelAttenuation {
     /// The seed technique's: per-axis clamped cosines weighted by the squared normal components.
-    /// A voxel whose mean normal is oblique to the light (an arch's curve, a corner where a lit
-    /// and an unlit face meet) gets light its faces do not, and sends it to every side: on
-    /// Dabrovic's Sponza the first gather's floors were 1.63 of the path tracer's
-    /// (ACCURACY.md, "The voxels' light by the mean normal's cosine").
+    /// Exact for a plane along an axis and for faces along the axes sharing a voxel (their
+    /// average); a plane oblique to the axes (an arch's curve) gets too much light when turned
+    /// from the light and too little when turned to it. On Dabrovic's Sponza the first
+    /// gather's floors were 1.63 of the path tracer's with it, 1.35 with `NDotL` (ACCURACY.md,
+    /// "The voxels' light by the mean normal's cosine").
     NormalWeighted,
     /// Plain max(N.L, 0) with the normalized average normal: exact for a voxel that one plane
     /// crosses. The default (the presets at 64^3 keep `NormalWeighted`, src/scene/preset.rs).
