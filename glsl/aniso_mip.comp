@@ -26,6 +26,9 @@ layout(constant_id = 2) const int DST_POOL = 0;
 layout(constant_id = 3) const bool TWO_TAP = false;
 // gi.opacity = "layers": an opaque texel holds optical depth LAYER_TAU (voxel.glsl).
 layout(constant_id = 4) const bool LAYERS = false;
+// gi.attenuation = "per-side": level 0 shows each side of a full-resolution voxel its side
+// factor times its radiance (voxel_light.comp, pack_sides in voxel.glsl).
+layout(constant_id = 5) const bool PER_SIDE = false;
 
 vec4 stored(vec4 premultiplied) {
     return TWO_TAP ? premultiplied : tau_from_alpha(premultiplied, LAYERS ? LAYER_TAU : VOXEL_TAU);
@@ -45,6 +48,8 @@ layout(set = 0, binding = 3, r32ui) uniform readonly uimage3D brick_maps[4];
 #include "brick_list.glsl"
 // The full-resolution normal volume (voxel.glsl; read by level 0 with DIRECTIONAL_COVER).
 layout(set = 0, binding = 5, r32ui) uniform readonly uimage3D vox_normal;
+// The voxel light's side factors (read by level 0 with PER_SIDE).
+layout(set = 0, binding = 6, r32ui) uniform readonly uimage3D vox_sides;
 
 vec4 over(vec4 front, vec4 back) {
     return front + (1.0 - clamp(front.a, 0.0, 1.0)) * back;
@@ -62,14 +67,18 @@ ivec3 block_texel[8];
 vec4 full_block[8];
 // With DIRECTIONAL_COVER, each full-resolution voxel's share seen along x, y, z.
 vec3 block_share[8];
+// With PER_SIDE, each full-resolution voxel's side factors.
+uint block_sides[8];
 
 void find_block(ivec3 base) {
     for (int i = 0; i < 8; ++i) {
         ivec3 c = base + ivec3(i & 1, (i >> 1) & 1, i >> 2);
         block_texel[i] = src_texel(c);
         block_share[i] = vec3(1.0);
+        block_sides[i] = 0u;
         if (!FROM_FULL) continue;
         full_block[i] = block_texel[i].x < 0 ? vec4(0.0) : imageLoad(src[0], block_texel[i]);
+        if (PER_SIDE && full_block[i].a > 0.0) block_sides[i] = imageLoad(vox_sides, full_texel(c)).r;
         if (DIRECTIONAL_COVER && full_block[i].a > 0.0) {
             vec3 n = unpack_rgb_count(imageLoad(vox_normal, full_texel(c)).r).rgb / 255.0 * 2.0 - 1.0;
             block_share[i] = vec3(directional_share(n, 0), directional_share(n, 1), directional_share(n, 2));
@@ -78,9 +87,13 @@ void find_block(ivec3 base) {
 }
 
 // Voxel i of the block as the volume of direction `face` sees it: with DIRECTIONAL_COVER, its
-// cover along that axis (directional_share), radiance premultiplied.
+// cover along that axis (directional_share), radiance premultiplied; with PER_SIDE, the light
+// of its side that faces the cones (those travelling +x meet the faces toward -x: side
+// face ^ 1).
 vec4 seen_from(vec4 v, int i, int face) {
-    return DIRECTIONAL_COVER ? v * block_share[i][face / 2] : v;
+    vec4 seen = DIRECTIONAL_COVER ? v * block_share[i][face / 2] : v;
+    if (PER_SIDE) seen.rgb *= side_factor(block_sides[i], face ^ 1);
+    return seen;
 }
 
 // Literal indices only: arrays of storage images are not indexed dynamically.

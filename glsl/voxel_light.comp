@@ -15,6 +15,8 @@ layout(local_size_x = 64) in;
 layout(constant_id = 0) const bool HAS_EMISSION = false;
 layout(constant_id = 1) const bool NORMAL_WEIGHTED = true;
 layout(constant_id = 2) const bool RAYMARCH = false;
+// gi.attenuation = "per-side": write each voxel's side factors (voxel.glsl, pack_sides).
+layout(constant_id = 3) const bool PER_SIDE = false;
 
 layout(set = 0, binding = 0) uniform FrameBlock { FrameData frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Lights { Light lights[]; };
@@ -29,6 +31,7 @@ layout(set = 0, binding = 8, rgba16f) uniform writeonly image3D vox_radiance;
 #include "voxel_list.glsl"
 layout(set = 0, binding = 10, r32ui) uniform readonly uimage3D brick_maps[4];
 #include "bricks.glsl"
+layout(set = 0, binding = 11, r32ui) uniform writeonly uimage3D vox_sides;
 
 layout(push_constant) uniform Push { float softness; } pc;
 
@@ -102,13 +105,18 @@ void main() {
     // G-buffer reads them for the pixels on that surface.
     vec3 surface = center + N * (decode_surface_offset(normal_word.a) * voxel);
     vec3 irradiance = vec3(0.0);
+    // With PER_SIDE, a voxel whose faces face different ways also sums, by luminance, the
+    // light its mean normal receives and the light a face along each side's axis receives.
+    bool faces_differ = PER_SIDE && length(n_avg) < ONE_PLANE;
+    float mean_light = 0.0;
+    float side_light[6] = float[6](0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     for (uint i = 0u; i < frame.counts.z; ++i) {
         Light l = lights[i];
         // Not nearer than half a voxel: a voxel stands for its whole extent, over which the
         // irradiance of a light inside it averages to a finite value.
         LightSample s = sample_light_near(l, surface, 0.5 * voxel);
         float att = attenuation(n_avg, s.wi);
-        if (att <= 0.0 || max(s.irradiance.r, max(s.irradiance.g, s.irradiance.b)) <= 0.0) continue;
+        if ((att <= 0.0 && !faces_differ) || max(s.irradiance.r, max(s.irradiance.g, s.irradiance.b)) <= 0.0) continue;
         float vis = 1.0;
         if (RAYMARCH) {
             vec3 g = (center - grid.origin.xyz) / voxel + N * 1.5;
@@ -121,6 +129,17 @@ void main() {
                                     frame.shadow.x, frame.shadow.y, frame.shadow.z);
         }
         irradiance += s.irradiance * att * vis;
+        if (faces_differ) {
+            float e = dot(s.irradiance, vec3(0.2126, 0.7152, 0.0722)) * vis;
+            mean_light += e * att;
+            for (int j = 0; j < 6; ++j) side_light[j] += e * max((j & 1) == 0 ? s.wi[j / 2] : -s.wi[j / 2], 0.0);
+        }
+    }
+    if (PER_SIDE) {
+        // Where the mean normal gets no light there is no radiance to share out: 1 everywhere.
+        float k[6];
+        for (int j = 0; j < 6; ++j) k[j] = faces_differ && mean_light > 0.0 ? side_light[j] / mean_light : 1.0;
+        imageStore(vox_sides, t, uvec4(pack_sides(k)));
     }
     vec3 radiance = albedo * INV_PI * irradiance;
     if (HAS_EMISSION) {

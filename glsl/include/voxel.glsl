@@ -106,6 +106,26 @@ float directional_share(vec3 n, int a) {
     return m[a] / top;
 }
 
+// gi.attenuation = "per-side" (voxel_light.comp, aniso_mip.comp). A voxel whose mean normal is
+// at least this long holds one plane, or faces within about 50 degrees of each other (two
+// faces of equal area at angle t give cos(t/2)), which the mean normal's cosine lights right
+// from every side; a shorter one holds faces that face different ways (an edge, a corner, both
+// sides of a thin slab), each lit by its own cosine.
+const float ONE_PLANE = 0.9;
+
+// The six side factors of a voxel (side j faces +x, -x, +y, -y, +z, -z for j = 0..5): the light
+// of its faces along the side's axis over the light of its mean normal, each in 5 bits as
+// k * 16, so 0..1.9375 in steps of 1/16; 16 (1) where nothing changes.
+uint pack_sides(float k[6]) {
+    uint word = 0u;
+    for (int j = 0; j < 6; ++j) word |= uint(round(clamp(k[j], 0.0, 31.0 / 16.0) * 16.0)) << (5 * j);
+    return word;
+}
+
+float side_factor(uint word, int j) {
+    return float((word >> (5 * j)) & 31u) / 16.0;
+}
+
 // The albedo volume's fourth byte for a cover c in [0, 1] (1..255), and the cover an albedo
 // word holds.
 float cover_code(float c) {

@@ -454,6 +454,15 @@ pub enum VoxelAttenuation {
     /// Plain max(N.L, 0) with the normalized average normal: exact for a voxel that one plane
     /// crosses. The default (the presets at 64^3 keep `NormalWeighted`, src/scene/preset.rs).
     NDotL,
+    /// `NDotL`, and a voxel whose surfaces face different ways (the mean normal shorter than
+    /// `ONE_PLANE` in glsl/include/voxel.glsl: an edge, a corner, both sides of a thin slab)
+    /// shows each side the light of its faces along that side's axis, max(s.L, 0), rather than
+    /// the mean normal's light to every side: its sunlit top lights what is above it and not
+    /// what is beside or under it. The voxel light stores one factor per side (a full-resolution
+    /// R32_UINT volume more); the directional volumes' first level applies them
+    /// (glsl/aniso_mip.comp). The full-resolution radiance (the rays of `diffuse_rays`, cone
+    /// samples finer than the first level) stays the mean normal's.
+    PerSide,
 }
 
 /// How a cone sample filters the directional volumes (glsl/include/cone.glsl, ACCURACY.md).

@@ -44,6 +44,8 @@ impl VoxelLightPass {
             .storage_image(&volumes.radiance, write)
             .storage(&volumes.list.buffer, buffer)
             .extend(volumes.brick_maps(read))
+            // gi.attenuation = "per-side": each occupied voxel's side factors (else a placeholder).
+            .storage_image(volumes.sides_or_placeholder(), write)
             .build(ctx, "voxel light", vk::ShaderStageFlags::COMPUTE)?;
         let pipeline = Pipeline::compute(
             ctx,
@@ -55,6 +57,7 @@ impl VoxelLightPass {
                 (0, u32::from(volumes.needs.emission)),
                 (1, u32::from(gi.attenuation == VoxelAttenuation::NormalWeighted)),
                 (2, u32::from(gi.occlusion == VoxelOcclusion::Raymarch)),
+                (3, u32::from(volumes.needs.sides)),
             ],
         )?;
         Ok(VoxelLightPass {

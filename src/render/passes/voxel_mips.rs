@@ -60,6 +60,7 @@ impl VoxelMips {
                 (2, pool(Some(dst))),
                 (3, u32::from(v.needs.two_tap)),
                 (4, u32::from(v.needs.layers)),
+                (5, u32::from(v.needs.sides)),
             ];
             let pipeline = Pipeline::compute(ctx, &name, shaders::ANISO_MIP_COMP, &[probe.layout()], 0, &spec)?;
             let set = src.map(|s| mip_set(ctx, v, &name, level(v, s), dst)).transpose()?;
@@ -120,7 +121,8 @@ fn source(volume: &Arc<Image>) -> Binds<'_> {
 }
 
 /// The source (six views), the destination level, the grid, the brick maps and lists, the
-/// normal volume (read by level 0 with `gi.voxel_cover = "directional"`).
+/// normal volume (read by level 0 with `gi.voxel_cover = "directional"`) and the side factors
+/// (read by level 0 with `gi.attenuation = "per-side"`).
 fn mip_set<'a>(ctx: &Arc<Context>, v: &'a VoxelVolumes, name: &str, src: Binds<'a>, dst: Level) -> GpuResult<PassSet> {
     // Without bricks the shader never reads the brick lists: the voxel list stands in.
     let lists = v.bricks.as_ref().map_or(&v.list.buffer, |b| &b.lists);
@@ -129,6 +131,7 @@ fn mip_set<'a>(ctx: &Arc<Context>, v: &'a VoxelVolumes, name: &str, src: Binds<'
         .extend(v.brick_maps(Access::ComputeShaderReadStorage))
         .storage(lists, Access::ComputeShaderReadBuffer)
         .storage_image(&v.normal, Access::ComputeShaderReadStorage)
+        .storage_image(v.sides_or_placeholder(), Access::ComputeShaderReadStorage)
         .build(ctx, name, vk::ShaderStageFlags::COMPUTE)
 }
 

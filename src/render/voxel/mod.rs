@@ -12,7 +12,7 @@ pub use grid::{VoxelGrid, RADIANCE_VOLUME_FORMAT};
 use crate::gpu::{Access, Buffer, Context, GpuError, GpuResult, Image, ImageDesc, Sampler};
 use crate::render::binding::Binds;
 use crate::render::cones::GpuGiParams;
-use crate::scene::{ConeFilter, GiSettings, Opacity, Scene, View, VoxelCover, VoxelLayout};
+use crate::scene::{ConeFilter, GiSettings, Opacity, Scene, View, VoxelAttenuation, VoxelCover, VoxelLayout};
 use ash::vk;
 use bricks::{BrickLayout, Bricks, FullImages, MAX_POOLS};
 use bytemuck::{Pod, Zeroable};
@@ -83,6 +83,9 @@ pub struct VoxelNeeds {
     pub area_cover: bool,
     /// The first update adds the bounce tail (`GiSettings::first_update_tail`): its records.
     pub bounce_tail: bool,
+    /// `gi.attenuation = "per-side"` with cones: the voxel light's factors per side (one more
+    /// full-resolution word, read by the directional volumes' first level).
+    pub sides: bool,
 }
 
 impl VoxelNeeds {
@@ -90,7 +93,7 @@ impl VoxelNeeds {
     /// albedo, normal, emission and the sums (R32_UINT), the static flags (R8_UINT), the
     /// bounce's scratch volume.
     pub fn full_images(&self) -> FullImages {
-        let words = 2 + u32::from(self.emission) + sum_word_indices(self).len() as u32;
+        let words = 2 + u32::from(self.emission) + u32::from(self.sides) + sum_word_indices(self).len() as u32;
         FullImages { words, bytes: u32::from(self.dynamic), scratch: self.bounces > 0 }
     }
 
@@ -113,6 +116,7 @@ impl VoxelNeeds {
             layers: cones && scene.settings.gi.opacity == Opacity::Layers,
             area_cover: scene.settings.gi.voxel_cover != VoxelCover::Touch,
             bounce_tail: cones && scene.settings.gi.first_update_tail(),
+            sides: cones && scene.settings.gi.attenuation == VoxelAttenuation::PerSide,
         }
     }
 }
@@ -155,6 +159,12 @@ pub struct VoxelVolumes {
     pub sampler: Sampler,
     /// Bound in place of `flags` when there is none (a 1-voxel volume).
     pub flags_placeholder: Option<Arc<Image>>,
+    /// With `needs.sides`: each occupied voxel's six factors, the light of its faces along each
+    /// side's axis over its mean normal's (R32_UINT, 5 bits a side: voxel.glsl, `pack_sides`),
+    /// written by the voxel light, read by the directional volumes' first level.
+    pub sides: Option<Arc<Image>>,
+    /// Bound in place of `sides` when there is none (a 1-voxel volume, never touched).
+    pub sides_placeholder: Option<Arc<Image>>,
     /// Emitted radiance that maps to 255 in the emission volume.
     pub emission_scale: f32,
     /// The radiance, bounce and directional volumes hold radiance times this
@@ -385,6 +395,8 @@ impl VoxelVolumes {
             emission: optional("voxel emission", &specs.emission)?,
             flags: optional("voxel static flags", &specs.flags)?,
             flags_placeholder: optional("voxel flags placeholder", &specs.flags_placeholder)?,
+            sides: optional("voxel side factors", &specs.sides)?,
+            sides_placeholder: optional("voxel side factors placeholder", &specs.sides_placeholder)?,
             emission_scale,
             radiance_scale,
             diffuse_rays: scene.settings.gi.diffuse_rays,
@@ -441,6 +453,7 @@ impl VoxelVolumes {
         let mut v = vec![&self.albedo, &self.normal];
         v.extend(self.emission.as_ref());
         v.extend(self.flags.as_ref());
+        v.extend(self.sides.as_ref());
         v.push(&self.radiance);
         v.extend(self.bounced.iter());
         v.extend(self.sums.iter().map(|(_, image)| image));
@@ -468,6 +481,11 @@ impl VoxelVolumes {
 
     pub fn flags_or_placeholder(&self) -> &Arc<Image> {
         self.flags.as_ref().or(self.flags_placeholder.as_ref()).expect("flags or placeholder")
+    }
+
+    /// The side factors, or their placeholder where `gi.attenuation` is not `"per-side"`.
+    pub fn sides_or_placeholder(&self) -> &Arc<Image> {
+        self.sides.as_ref().or(self.sides_placeholder.as_ref()).expect("sides or placeholder")
     }
 }
 

@@ -62,6 +62,8 @@ pub struct VolumeSpecs {
     /// The static flags (R8_UINT), with dynamic objects; else their 1^3 placeholder.
     pub flags: Option<Alloc>,
     pub flags_placeholder: Option<Alloc>,
+    pub sides: Option<Alloc>,
+    pub sides_placeholder: Option<Alloc>,
     /// The voxelization's sums (R32_UINT).
     pub sums: Vec<Alloc>,
     /// The direct radiance (RGBA16F, sampled; pool 0 at 9^3 per slot, with the apron).
@@ -123,6 +125,8 @@ impl VolumeSpecs {
             emission: needs.emission.then(|| volume(F::R32_UINT)),
             flags: needs.dynamic.then(|| volume(F::R8_UINT)),
             flags_placeholder: (!needs.dynamic).then(|| placeholder(F::R8_UINT, false)),
+            sides: needs.sides.then(|| volume(F::R32_UINT)),
+            sides_placeholder: (!needs.sides).then(|| placeholder(F::R32_UINT, false)),
             sums: sum_word_indices(needs).iter().map(|_| volume(F::R32_UINT)).collect(),
             radiance,
             bounced: if needs.bounces > 0 { vec![radiance, volume(RADIANCE_VOLUME_FORMAT)] } else { Vec::new() },
@@ -152,6 +156,8 @@ impl VolumeSpecs {
         out.extend(self.emission);
         out.extend(self.flags);
         out.extend(self.flags_placeholder);
+        out.extend(self.sides);
+        out.extend(self.sides_placeholder);
         out.extend(&self.sums);
         out.push(self.radiance);
         out.extend(&self.bounced);
