@@ -445,6 +445,7 @@ impl VoxelVolumes {
         v.extend(self.directional.iter());
         v.extend(self.bricks.iter().flat_map(|b| b.images()));
         v.extend([&self.map_placeholder, &self.read_placeholder, &self.pool_placeholder]);
+        v.extend(self.sides_placeholder.as_ref());
         v
     }
 
