@@ -460,7 +460,7 @@ pub enum VoxelAttenuation {
     /// the mean normal's light to every side: its sunlit top lights what is above it and not
     /// what is beside or under it. The voxel light stores one factor per side (a full-resolution
     /// R32_UINT volume more); the directional volumes' first level applies them
-    /// (glsl/aniso_mip.comp). The full-resolution radiance (the rays of `diffuse_rays`, cone
+    /// (glsl/aniso_mip.comp) to the voxel's whole radiance, its bounced light and emission too. The full-resolution radiance (the rays of `diffuse_rays`, cone
     /// samples finer than the first level) stays the mean normal's.
     PerSide,
 }
