@@ -48,7 +48,7 @@ void main() {
             ivec2 px = corner + ivec2(i % 32u, i / 32u + 2u * k);
             if (any(greaterThanEqual(px, size))) continue;
             vec3 c = imageLoad(radiance, px).rgb;
-            float y = dot(c, vec3(0.2126, 0.7152, 0.0722));
+            float y = luminance(c);
             if (!isnan(y) && !isinf(y) && y > 0.0) mine += vec2(log2(y), 1.0);
         }
         sums[i] = mine;

@@ -130,7 +130,7 @@ void main() {
         }
         irradiance += s.irradiance * att * vis;
         if (faces_differ) {
-            float e = dot(s.irradiance, vec3(0.2126, 0.7152, 0.0722)) * vis;
+            float e = luminance(s.irradiance) * vis;
             mean_light += e * att;
             for (int j = 0; j < 6; ++j) side_light[j] += e * max((j & 1) == 0 ? s.wi[j / 2] : -s.wi[j / 2], 0.0);
         }

@@ -454,6 +454,16 @@ fn two_tap_cone_samples_keep_walls_opaque_and_partial_cover_partial() {
     assert!((b - 1.0).abs() < (a - 1.0).abs(), "indirect energy: trilinear {a:.3}, two-tap {b:.3}");
 }
 
+/// A shadow-casting sun of irradiance 3 travelling along `direction`.
+fn sun(direction: Vec3) -> dvsgi::scene::Light {
+    dvsgi::scene::Light {
+        name: "sun".into(),
+        kind: dvsgi::scene::LightKind::Directional { direction: direction.normalize(), irradiance: Vec3::splat(3.0) },
+        cast_shadows: true,
+        motion: Motion::None,
+    }
+}
+
 /// The voxel light reads the shadow maps on the surface inside each voxel (voxel.glsl,
 /// SUM_OFFSET), as the pixels on that surface do: a wall under a 6 cm ledge, lit by a sun 13
 /// degrees off the wall's plane (the ledge shadows 25 cm of it), has voxels as dark as its
@@ -465,15 +475,7 @@ fn the_voxel_light_is_shadowed_where_its_surface_is() {
     let ctx = context();
     let wall = quad(Vec3::new(0.0, 0.5, 0.5), Vec3::new(0.0, 0.5, 0.0), Vec3::new(0.0, 0.0, 0.3), Vec3::X);
     let ledge = quad(Vec3::new(0.03, 0.8, 0.5), Vec3::new(0.03, 0.0, 0.0), Vec3::new(0.0, 0.0, 0.3), -Vec3::Y);
-    let sun = dvsgi::scene::Light {
-        name: "sun".into(),
-        kind: dvsgi::scene::LightKind::Directional {
-            direction: Vec3::new(-0.23, -0.97, 0.0).normalize(),
-            irradiance: Vec3::splat(3.0),
-        },
-        cast_shadows: true,
-        motion: Motion::None,
-    };
+    let sun = sun(Vec3::new(-0.23, -0.97, 0.0));
     let make = |view: dvsgi::scene::View, mode: dvsgi::scene::GiMode| {
         let mut s = scene_of(
             vec![mesh("wall", &wall, 0, None), mesh("ledge", &ledge, 0, None)],
@@ -934,15 +936,7 @@ fn per_side_light_keeps_a_block_s_unlit_side_dark() {
     block.extend(quad(c - Vec3::X * hx, Vec3::Y * hy, Vec3::Z * hz, -Vec3::X));
     block.extend(quad(c + Vec3::Z * hz, Vec3::X * hx, Vec3::Y * hy, Vec3::Z));
     block.extend(quad(c - Vec3::Z * hz, Vec3::X * hx, Vec3::Y * hy, -Vec3::Z));
-    let sun = dvsgi::scene::Light {
-        name: "sun".into(),
-        kind: dvsgi::scene::LightKind::Directional {
-            direction: Vec3::new(-0.6, -0.8, 0.0).normalize(),
-            irradiance: Vec3::splat(3.0),
-        },
-        cast_shadows: true,
-        motion: Motion::None,
-    };
+    let sun = sun(Vec3::new(-0.6, -0.8, 0.0));
     let make = |attenuation: dvsgi::scene::VoxelAttenuation| {
         let mut s = scene_of(
             vec![mesh("floor", &floor, 0, None), mesh("block", &block, 0, None)],

@@ -4,6 +4,12 @@
 
 const float PI = 3.14159265358979323846;
 const float INV_PI = 0.31830988618379067154;
+
+// Rec. 709 luminance of linear RGB (the auto exposure's average, the voxel light's side factors).
+float luminance(vec3 c) {
+    return dot(c, vec3(0.2126, 0.7152, 0.0722));
+}
+
 // Largest finite half float. Radiance in 16-bit targets is stored times the scene's radiance
 // scale (FrameData.radiance_scale, VoxelGrid.params.y), which keeps it in range; the clamp to
 // HALF_MAX is only a last guard.
