@@ -32,6 +32,7 @@ layout(set = 0, binding = 8, rgba16f) uniform writeonly image3D vox_radiance;
 layout(set = 0, binding = 10, r32ui) uniform readonly uimage3D brick_maps[4];
 #include "bricks.glsl"
 layout(set = 0, binding = 11, r32ui) uniform writeonly uimage3D vox_sides;
+layout(set = 0, binding = 12, rgba32ui) uniform readonly uimage3D vox_side_normals;
 
 layout(push_constant) uniform Push { float softness; } pc;
 
@@ -106,10 +107,16 @@ void main() {
     vec3 surface = center + N * (decode_surface_offset(normal_word.a) * voxel);
     vec3 irradiance = vec3(0.0);
     // With PER_SIDE, a voxel whose faces face different ways also sums, by luminance, the
-    // light its mean normal receives and the light a face along each side's axis receives.
+    // light its mean normal receives and the light its faces seen from each side receive
+    // (voxel.glsl, side_normal).
     bool faces_differ = PER_SIDE && length(n_avg) < ONE_PLANE;
     float mean_light = 0.0;
     float side_light[6] = float[6](0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    vec3 side_n[6];
+    if (faces_differ) {
+        uvec4 packed = imageLoad(vox_side_normals, t);
+        for (int j = 0; j < 6; ++j) side_n[j] = side_normal(packed, j);
+    }
     for (uint i = 0u; i < frame.counts.z; ++i) {
         Light l = lights[i];
         // Not nearer than half a voxel: a voxel stands for its whole extent, over which the
@@ -132,7 +139,7 @@ void main() {
         if (faces_differ) {
             float e = luminance(s.irradiance) * vis;
             mean_light += e * att;
-            for (int j = 0; j < 6; ++j) side_light[j] += e * max((j & 1) == 0 ? s.wi[j / 2] : -s.wi[j / 2], 0.0);
+            for (int j = 0; j < 6; ++j) side_light[j] += e * max(dot(side_n[j], s.wi), 0.0);
         }
     }
     if (PER_SIDE) {

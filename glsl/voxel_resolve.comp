@@ -23,6 +23,8 @@ layout(local_size_x = 64) in;
 #define RESOLVE 2
 layout(constant_id = 0) const int MODE = COUNT;
 layout(constant_id = 1) const bool HAS_EMISSION = false;
+// gi.attenuation = "per-side": the normals seen from each side (voxel.glsl, SUM_SIDES).
+layout(constant_id = 2) const bool SIDE_NORMALS = false;
 
 layout(set = 0, binding = 0) uniform GridBlock { VoxelGrid grid; };
 layout(set = 0, binding = 1, r32ui) uniform uimage3D vox_sums[SUM_WORDS];
@@ -35,6 +37,7 @@ layout(set = 0, binding = 4, r32ui) uniform writeonly uimage3D vox_emission;
 #include "scan_buffer.glsl"
 layout(set = 0, binding = 7, r32ui) uniform readonly uimage3D brick_maps[4];
 #include "bricks.glsl"
+layout(set = 0, binding = 8, rgba32ui) uniform writeonly uimage3D vox_side_normals;
 
 // The average of three channels of the sums from word `first` on, and those sums zeroed.
 vec3 take_mean(ivec3 t, int first, uint count) {
@@ -42,6 +45,24 @@ vec3 take_mean(ivec3 t, int first, uint count) {
                       imageLoad(vox_sums[first + 2], t).r);
     for (int i = 0; i < 3; ++i) imageStore(vox_sums[first + i], t, uvec4(0u));
     return sum_mean(sum, count, grid.dims.w);
+}
+
+// The six sides' normals of voxel texel t (voxel.glsl, pack_side_normal) from its `count`
+// samples' sums; those sums back to zero.
+uvec4 take_side_normals(ivec3 t, uint count) {
+    uvec4 packed = uvec4(0u);
+    for (int j = 0; j < 6; ++j) {
+        int first = SUM_SIDES + 4 * j;
+        vec4 sum;
+        for (int i = 0; i < 4; ++i) {
+            sum[i] = float(int(imageLoad(vox_sums[first + i], t).r));
+            imageStore(vox_sums[first + i], t, uvec4(0u));
+        }
+        // sum.w: the weights' sum, in halves of the fixed-point one.
+        if (sum.w <= SIDE_SEEN * 0.5 * float(count) * float(grid.dims.w)) continue;
+        pack_side_normal(packed, sum.xyz / sum.w, j);
+    }
+    return packed;
 }
 
 // Voxel texel t's averages from its `count` samples; its sums back to zero.
@@ -63,6 +84,7 @@ void resolve(ivec3 t, uint count) {
     if (HAS_EMISSION) {
         imageStore(vox_emission, t, uvec4(pack_rgb_count(take_mean(t, SUM_EMISSION, count) * 255.0, n)));
     }
+    if (SIDE_NORMALS) imageStore(vox_side_normals, t, take_side_normals(t, count));
 }
 
 void brick_pass() {

@@ -28,6 +28,8 @@ layout(constant_id = 0) const uint TEXTURE_COUNT = 1;
 layout(constant_id = 2) const bool HAS_EMISSION = false;
 layout(constant_id = 3) const bool HAS_FLAGS = false;
 layout(constant_id = 4) const bool MARK = false;
+// gi.attenuation = "per-side": the normals seen from each side (voxel.glsl, SUM_SIDES).
+layout(constant_id = 5) const bool SIDE_NORMALS = false;
 
 layout(set = 0, binding = 2, std430) readonly buffer Materials { Material materials[]; };
 layout(set = 0, binding = 3) uniform texture2D textures[TEXTURE_COUNT];
@@ -56,6 +58,20 @@ void add_sample(ivec3 t, int first, vec3 value) {
     if (q.x != 0u) imageAtomicAdd(vox_sums[first], t, q.x);
     if (q.y != 0u) imageAtomicAdd(vox_sums[first + 1], t, q.y);
     if (q.z != 0u) imageAtomicAdd(vox_sums[first + 2], t, q.z);
+}
+
+// A sample's normal n seen from each side it faces: (w n, w), w = n.s, into that side's sums
+// (voxel.glsl, SUM_SIDES).
+void add_side_normals(ivec3 t, vec3 n) {
+    for (int a = 0; a < 3; ++a) {
+        if (n[a] == 0.0) continue;
+        int first = SUM_SIDES + 4 * (2 * a + (n[a] > 0.0 ? 0 : 1));
+        float w = abs(n[a]);
+        uvec4 q = signed_sum_sample(vec4(w * n, w), grid.dims.w);
+        for (int i = 0; i < 4; ++i) {
+            if (q[i] != 0u) imageAtomicAdd(vox_sums[first + i], t, q[i]);
+        }
+    }
 }
 
 // The bricks voxel vc needs: in the full-resolution pool and on each pooled directional level,
@@ -281,6 +297,7 @@ void main() {
         if (earlier == 0u && pc.mark_static == 0u) list_append(vc);
         add_sample(vt, SUM_ALBEDO, albedo);
         add_sample(vt, SUM_NORMAL, nrm * 0.5 + 0.5);
+        if (SIDE_NORMALS) add_side_normals(vt, nrm);
         imageAtomicMax(vox_sums[SUM_OFFSET], vt, surface_offset_word(dot(g_t0 - (voxel + 0.5), facing)));
         if (AREA_COVER) {
             uint cover = uint(round(clamp(share[k - k0], 0.0, 1.0) * float(grid.dims.w)));

@@ -1002,3 +1002,61 @@ fn per_side_light_keeps_a_block_s_unlit_side_dark() {
     }
     assert_no_validation_messages(&ctx);
 }
+
+/// `gi.attenuation = "per-side"` on a surface that is not made of faces along the axes: a wall
+/// facing +x, corrugated along y with facets whose normals are (0.8, +-0.6, 0) and ridges finer
+/// than a voxel, so every voxel of it holds both facets (mean normal (0.8, 0, 0), shorter than
+/// `ONE_PLANE`). A sun from +x, level with the wall's middle, lights both facets at 0.8 of its
+/// irradiance. Seen from +x a voxel shows both facets and from -y the one facing down: 0.8 of
+/// the irradiance from either side, the facets' own light. The mean normal's cosine gives the
+/// voxel 1 to every side, and faces along the axes would give the -y side none. The voxel-mip
+/// view of the directional volumes' first level, where the side factors apply (13/16 for 0.8),
+/// must show 0.8 of the mean normal's light from both sides.
+#[test]
+fn per_side_light_shows_a_corrugated_wall_s_facets_from_each_side() {
+    use dvsgi::scene::{View, ViewDirection, VoxelAttenuation};
+    let ctx = context();
+    // Facets of 0.01 along y and 0.0075 along x (slope 0.75: normals (0.8, +-0.6, 0)).
+    let (rise, run, x0) = (0.01f32, 0.0075f32, -0.1f32);
+    let mut wall = Vec::new();
+    for k in 0..15 {
+        let y = -0.15 + 2.0 * rise * k as f32;
+        let (a, b, c) = (Vec3::new(x0, y, 0.0), Vec3::new(x0 + run, y + rise, 0.0), Vec3::new(x0, y + 2.0 * rise, 0.0));
+        let half_z = Vec3::Z * 0.25;
+        wall.extend(quad((a + b) * 0.5, (b - a) * 0.5, half_z, Vec3::new(0.8, -0.6, 0.0)));
+        wall.extend(quad((b + c) * 0.5, (c - b) * 0.5, half_z, Vec3::new(0.8, 0.6, 0.0)));
+    }
+    let shown = |attenuation: VoxelAttenuation, direction: ViewDirection| {
+        let mut s = scene_of(
+            vec![mesh("wall", &wall, 0, None)],
+            vec![material("white", 0.8, Vec3::ZERO)],
+            camera(Vec3::new(0.6, 0.0, 0.0), Vec3::new(-0.1, 0.0, 0.0), 60.0),
+            vec![sun(Vec3::new(-1.0, 0.0, 0.0))],
+            Aabb { min: Vec3::splat(-0.55), max: Vec3::splat(0.55) },
+        );
+        s.settings.width = 32;
+        s.settings.height = 32;
+        s.settings.gi.voxel_resolution = 32;
+        s.settings.gi.bounces = 0;
+        s.settings.gi.first_update_bounces = 0;
+        s.settings.gi.attenuation = attenuation;
+        s.settings.view = View::VoxelMip;
+        s.settings.view_lod = 1.0;
+        s.settings.view_direction = direction;
+        let img = linear(&render(&ctx, s).0);
+        img.rgb.iter().map(|&v| f64::from(v)).sum::<f64>()
+    };
+    // A cone travelling -x sees the +x side; one travelling +y the -y side.
+    for (side, direction) in [("+x", ViewDirection::NegX), ("-y", ViewDirection::PosY)] {
+        let (mean_light, per_side) =
+            (shown(VoxelAttenuation::NDotL, direction), shown(VoxelAttenuation::PerSide, direction));
+        eprintln!("the wall from its {side} side: n-dot-l {mean_light:.3}, per-side {per_side:.3}");
+        assert!(mean_light > 1.0, "the wall is lit and in view: {mean_light:.3}");
+        let ratio = per_side / mean_light;
+        assert!(
+            (ratio - 0.8125).abs() < 0.03,
+            "per-side light shows the {side} side its facets' light: {ratio:.3} of the mean normal's"
+        );
+    }
+    assert_no_validation_messages(&ctx);
+}

@@ -65,17 +65,19 @@ vec4 unpack_rgb_count(uint v) {
 // so that no sum can overflow: a voxel receives at most one sample per drawn triangle.
 // The sums are R32_UINT volumes of the full-resolution extent (pool 0 with bricks), one per
 // word: SUM_COUNT, then three per attribute (SUM_ALBEDO, SUM_NORMAL), one for the surface's
-// offset (SUM_OFFSET, below), three for SUM_EMISSION and one for the surfaces' cover
-// (SUM_COVER, below). The emission's words exist only with emission, the cover's only with
-// gi.voxel_cover = "area" (render::voxel::sum_word_indices); a placeholder, never touched,
-// is bound in their place otherwise.
+// offset (SUM_OFFSET, below), three for SUM_EMISSION, one for the surfaces' cover
+// (SUM_COVER, below) and twenty-four for the normals seen from each side (SUM_SIDES, below). The
+// emission's words exist only with emission, the cover's only with gi.voxel_cover = "area",
+// the sides' only with gi.attenuation = "per-side" (render::voxel::sum_word_indices); a
+// placeholder, never touched, is bound in their place otherwise.
 const int SUM_COUNT = 0;
 const int SUM_ALBEDO = 1;
 const int SUM_NORMAL = 4;
 const int SUM_OFFSET = 7;
 const int SUM_EMISSION = 8;
 const int SUM_COVER = 11;
-const int SUM_WORDS = 12;
+const int SUM_SIDES = 12;
+const int SUM_WORDS = 36;
 
 // How much of a voxel its surfaces cover (gi.voxel_cover): "touch" (every voxel a triangle
 // touches is opaque, the conservative voxelization) or "area" (grid.params.w = 1).
@@ -114,7 +116,8 @@ float directional_share(vec3 n, int a) {
 const float ONE_PLANE = 0.9;
 
 // The six side factors of a voxel (side j faces +x, -x, +y, -y, +z, -z for j = 0..5): the light
-// of its faces along the side's axis over the light of its mean normal, each in 5 bits as
+// of its faces seen from that side (side_normal below) over the light of its mean normal, each
+// in 5 bits as
 // k * 16, so 0..1.9375 in steps of 1/16; 16 (1) where nothing changes.
 uint pack_sides(float k[6]) {
     uint word = 0u;
@@ -124,6 +127,62 @@ uint pack_sides(float k[6]) {
 
 float side_factor(uint word, int j) {
     return float((word >> (5 * j)) & 31u) / 16.0;
+}
+
+// What a voxel's faces look like from each side (gi.attenuation = "per-side"): side j's normal
+// is the mean of the normals of the samples that face it (n.s > 0), each weighted by w = n.s,
+// the share of its area seen from that side: m = sum(w n) / sum(w), shorter than 1 where those
+// faces differ. Where they are all lit, m.wi is exactly the mean of their cosines weighted by
+// what the side sees of them, so a curved surface seen from the side shows its tilted faces,
+// lit as they are lit, and a face seen edge-on adds nothing. The voxelization sums each
+// sample's (w n, w) for its sides (at most three, one per axis it is not parallel to) in the
+// four words from SUM_SIDES + 4 j, signed: halved, in fixed point, added as two's complement,
+// so a sum of at most one sample per drawn triangle stays within 32 bits
+// (render::voxel::sum_scale). voxel_resolve.comp divides them and packs the six in a uvec4
+// (pack_side_normal). A side whose samples' weights add to less than SIDE_SEEN of the voxel's
+// samples' count has none: the voxel light gives it the light of a face along the side's axis.
+const float SIDE_SEEN = 0.05;
+
+// Side j's axis direction (j = 0..5: +x, -x, +y, -y, +z, -z).
+vec3 side_axis(int j) {
+    vec3 s = vec3(0.0);
+    s[j / 2] = (j & 1) == 0 ? 1.0 : -1.0;
+    return s;
+}
+
+// Side j's normal in 21 bits from bit 21 j of the 128 of a uvec4: its component along the
+// side's axis (in [0, 1], 7 bits as 1..127; 0 where the side has none) and the two across it
+// (in [-1, 1], 7 bits each).
+const int SIDE_BITS = 21;
+
+uint side_bits(uvec4 v, int pos, int n) {
+    int w = pos / 32, o = pos % 32;
+    uint bits = v[w] >> o;
+    if (o + n > 32) bits |= v[w + 1] << (32 - o);
+    return bits & ((1u << n) - 1u);
+}
+
+void pack_side_normal(inout uvec4 v, vec3 m, int j) {
+    int a = j / 2, pos = SIDE_BITS * j;
+    float along = abs(m[a]);
+    uint code = 1u + uint(round(clamp(along, 0.0, 1.0) * 126.0));
+    code |= uint(round(clamp(m[(a + 1) % 3] * 0.5 + 0.5, 0.0, 1.0) * 127.0)) << 7;
+    code |= uint(round(clamp(m[(a + 2) % 3] * 0.5 + 0.5, 0.0, 1.0) * 127.0)) << 14;
+    int w = pos / 32, o = pos % 32;
+    v[w] |= code << o;
+    if (o + SIDE_BITS > 32) v[w + 1] |= code >> (32 - o);
+}
+
+// Side j's normal from the packed uvec4, or its axis where it has none.
+vec3 side_normal(uvec4 v, int j) {
+    uint code = side_bits(v, SIDE_BITS * j, SIDE_BITS);
+    if ((code & 127u) == 0u) return side_axis(j);
+    int a = j / 2;
+    vec3 m;
+    m[a] = ((j & 1) == 0 ? 1.0 : -1.0) * float((code & 127u) - 1u) / 126.0;
+    m[(a + 1) % 3] = float((code >> 7) & 127u) / 127.0 * 2.0 - 1.0;
+    m[(a + 2) % 3] = float((code >> 14) & 127u) / 127.0 * 2.0 - 1.0;
+    return m;
 }
 
 // The albedo volume's fourth byte for a cover c in [0, 1] (1..255), and the cover an albedo
@@ -160,6 +219,12 @@ float decode_surface_offset(float e) {
 // A sample's channels in fixed point: what voxelize.frag adds to the sums.
 uvec3 sum_sample(vec3 value, uint one) {
     return uvec3(round(clamp(value, 0.0, 1.0) * float(one)));
+}
+
+// A signed sample in [-1, 1] for the sides' sums (SUM_SIDES): halved, in fixed point, as the
+// two's complement words an atomic add sums.
+uvec4 signed_sum_sample(vec4 value, uint one) {
+    return uvec4(ivec4(round(clamp(value, -1.0, 1.0) * 0.5 * float(one))));
 }
 
 // The mean of `count` samples whose fixed-point channels add up to `sum`, in [0,1].

@@ -455,13 +455,17 @@ pub enum VoxelAttenuation {
     /// crosses. The default (the presets at 64^3 keep `NormalWeighted`, src/scene/preset.rs).
     NDotL,
     /// `NDotL`, and a voxel whose surfaces face different ways (the mean normal shorter than
-    /// `ONE_PLANE` in glsl/include/voxel.glsl: an edge, a corner, both sides of a thin slab)
-    /// shows each side the light of its faces along that side's axis, max(s.L, 0), rather than
-    /// the mean normal's light to every side: its sunlit top lights what is above it and not
-    /// what is beside or under it. The voxel light stores one factor per side (a full-resolution
-    /// R32_UINT volume more); the directional volumes' first level applies them
-    /// (glsl/aniso_mip.comp) to the voxel's whole radiance, its bounced light and emission too. The full-resolution radiance (the rays of `diffuse_rays`, cone
-    /// samples finer than the first level) stays the mean normal's.
+    /// `ONE_PLANE` in glsl/include/voxel.glsl: an edge, a corner, both sides of a thin slab, a
+    /// curved surface) shows each side the light of the faces it sees there, rather than the
+    /// mean normal's light to every side: its sunlit top lights what is above it and not what is
+    /// beside or under it. The voxelization sums, per side, the normals of the faces toward it
+    /// weighted by the share of each the side sees (`side_normal` in voxel.glsl: 24 words of sums
+    /// more, resolved into one R32G32B32A32_UINT volume); a side no face looks toward gets a face
+    /// along its axis, max(s.L, 0). The voxel light stores one factor per side (one R32_UINT
+    /// volume more); the directional volumes' first level applies them (glsl/aniso_mip.comp) to
+    /// the voxel's whole radiance, its bounced light and emission too. The full-resolution
+    /// radiance (the rays of `diffuse_rays`, cone samples finer than the first level) stays the
+    /// mean normal's.
     PerSide,
 }
 

@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 pub fn bytes_per_texel(format: vk::Format) -> u64 {
     match format {
-        vk::Format::R32G32B32A32_SFLOAT => 16,
+        vk::Format::R32G32B32A32_SFLOAT | vk::Format::R32G32B32A32_UINT => 16,
         vk::Format::R16G16B16A16_SFLOAT => 8,
         vk::Format::R8_UINT | vk::Format::R8_UNORM => 1,
         _ => 4,

@@ -46,6 +46,8 @@ impl VoxelLightPass {
             .extend(volumes.brick_maps(read))
             // gi.attenuation = "per-side": each occupied voxel's side factors (else a placeholder).
             .storage_image(volumes.sides_or_placeholder(), write)
+            // ... from the normals seen from each side (the resolve's).
+            .storage_image(volumes.side_normals_or_placeholder(), read)
             .build(ctx, "voxel light", vk::ShaderStageFlags::COMPUTE)?;
         let pipeline = Pipeline::compute(
             ctx,

@@ -88,13 +88,12 @@ impl VoxelResolvePass {
             Some(_) => binds.storage(&v.scan, write),
             None => binds.idle(Bind::Storage(&v.scan)),
         };
-        let set = binds.extend(v.brick_maps(Access::ComputeShaderReadStorage)).build(
-            ctx,
-            "voxel resolve",
-            vk::ShaderStageFlags::COMPUTE,
-        )?;
+        let set = binds
+            .extend(v.brick_maps(Access::ComputeShaderReadStorage))
+            .storage_image(v.side_normals_or_placeholder(), write)
+            .build(ctx, "voxel resolve", vk::ShaderStageFlags::COMPUTE)?;
         let pipeline = |mode: Mode| {
-            let spec = [(0, mode as u32), (1, u32::from(v.needs.emission))];
+            let spec = [(0, mode as u32), (1, u32::from(v.needs.emission)), (2, u32::from(v.needs.sides))];
             Pipeline::compute(ctx, "voxel resolve", shaders::VOXEL_RESOLVE_COMP, &[set.layout()], 0, &spec)
         };
         let pipelines = match scan {

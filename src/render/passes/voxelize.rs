@@ -74,6 +74,7 @@ impl Voxelizer {
                         (2, u32::from(volumes.needs.emission)),
                         (3, u32::from(volumes.needs.dynamic)),
                         (4, u32::from(mark)),
+                        (5, u32::from(volumes.needs.sides)),
                     ],
                 },
                 &[set.layout()],

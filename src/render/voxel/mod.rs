@@ -84,7 +84,8 @@ pub struct VoxelNeeds {
     /// The first update adds the bounce tail (`GiSettings::first_update_tail`): its records.
     pub bounce_tail: bool,
     /// `gi.attenuation = "per-side"` with cones: the voxel light's factors per side (one more
-    /// full-resolution word, read by the directional volumes' first level).
+    /// full-resolution word, read by the directional volumes' first level), from the normals
+    /// seen from each side (twenty-four more words of sums, four of resolved normals).
     pub sides: bool,
 }
 
@@ -93,7 +94,8 @@ impl VoxelNeeds {
     /// albedo, normal, emission and the sums (R32_UINT), the static flags (R8_UINT), the
     /// bounce's scratch volume.
     pub fn full_images(&self) -> FullImages {
-        let words = 2 + u32::from(self.emission) + u32::from(self.sides) + sum_word_indices(self).len() as u32;
+        let sides = if self.sides { 1 + 4 } else { 0 };
+        let words = 2 + u32::from(self.emission) + sides + sum_word_indices(self).len() as u32;
         FullImages { words, bytes: u32::from(self.dynamic), scratch: self.bounces > 0 }
     }
 
@@ -165,6 +167,12 @@ pub struct VoxelVolumes {
     pub sides: Option<Arc<Image>>,
     /// Bound in place of `sides` when there is none (a 1-voxel volume, never touched).
     pub sides_placeholder: Option<Arc<Image>>,
+    /// With `needs.sides`: each occupied voxel's normals as seen from its six sides
+    /// (R32G32B32A32_UINT, 21 bits a side: voxel.glsl, `pack_side_normal`), written by the
+    /// resolve, read by the voxel light.
+    pub side_normals: Option<Arc<Image>>,
+    /// Bound in place of `side_normals` when there are none.
+    pub side_normals_placeholder: Option<Arc<Image>>,
     /// Emitted radiance that maps to 255 in the emission volume.
     pub emission_scale: f32,
     /// The radiance, bounce and directional volumes hold radiance times this
@@ -242,7 +250,7 @@ pub fn sum_scale(scene: &Scene) -> u32 {
 /// The six directions of the directional volumes, as their names say them.
 pub const DIRECTIONS: [&str; 6] = ["+x", "-x", "+y", "-y", "+z", "-z"];
 
-const SUM_NAMES: [&str; 12] = [
+const SUM_NAMES: [&str; 36] = [
     "count",
     "albedo r",
     "albedo g",
@@ -255,12 +263,37 @@ const SUM_NAMES: [&str; 12] = [
     "emission g",
     "emission b",
     "cover",
+    "side +x w n x",
+    "side +x w n y",
+    "side +x w n z",
+    "side +x w",
+    "side -x w n x",
+    "side -x w n y",
+    "side -x w n z",
+    "side -x w",
+    "side +y w n x",
+    "side +y w n y",
+    "side +y w n z",
+    "side +y w",
+    "side -y w n x",
+    "side -y w n y",
+    "side -y w n z",
+    "side -y w",
+    "side +z w n x",
+    "side +z w n y",
+    "side +z w n z",
+    "side +z w",
+    "side -z w n x",
+    "side -z w n y",
+    "side -z w n z",
+    "side -z w",
 ];
 
 /// The volumes of sums the voxelization adds to, as their words in `vox_sums[]`
 /// (glsl/include/voxel.glsl): a count, albedo and normal (three channels each) and where the
 /// surface lies in the voxel (one); with emission three more; with `gi.voxel_cover = "area"`
-/// or `"directional"` how much of the voxel its surfaces cover (one).
+/// or `"directional"` how much of the voxel its surfaces cover (one); with `gi.attenuation =
+/// "per-side"` the normals seen from each side (twenty-four: four for each of six sides).
 pub fn sum_word_indices(needs: &VoxelNeeds) -> Vec<usize> {
     let mut words: Vec<usize> = (0..8).collect();
     if needs.emission {
@@ -268,6 +301,9 @@ pub fn sum_word_indices(needs: &VoxelNeeds) -> Vec<usize> {
     }
     if needs.area_cover {
         words.push(11);
+    }
+    if needs.sides {
+        words.extend(12..36);
     }
     words
 }
@@ -397,6 +433,8 @@ impl VoxelVolumes {
             flags_placeholder: optional("voxel flags placeholder", &specs.flags_placeholder)?,
             sides: optional("voxel side factors", &specs.sides)?,
             sides_placeholder: optional("voxel side factors placeholder", &specs.sides_placeholder)?,
+            side_normals: optional("voxel side normals", &specs.side_normals)?,
+            side_normals_placeholder: optional("voxel side normals placeholder", &specs.side_normals_placeholder)?,
             emission_scale,
             radiance_scale,
             diffuse_rays: scene.settings.gi.diffuse_rays,
@@ -446,6 +484,7 @@ impl VoxelVolumes {
         v.extend(self.bricks.iter().flat_map(|b| b.images()));
         v.extend([&self.map_placeholder, &self.read_placeholder, &self.pool_placeholder]);
         v.extend(self.sides_placeholder.as_ref());
+        v.extend(self.side_normals_placeholder.as_ref());
         v
     }
 
@@ -455,6 +494,7 @@ impl VoxelVolumes {
         v.extend(self.emission.as_ref());
         v.extend(self.flags.as_ref());
         v.extend(self.sides.as_ref());
+        v.extend(self.side_normals.as_ref());
         v.push(&self.radiance);
         v.extend(self.bounced.iter());
         v.extend(self.sums.iter().map(|(_, image)| image));
@@ -487,6 +527,11 @@ impl VoxelVolumes {
     /// The side factors, or their placeholder where `gi.attenuation` is not `"per-side"`.
     pub fn sides_or_placeholder(&self) -> &Arc<Image> {
         self.sides.as_ref().or(self.sides_placeholder.as_ref()).expect("sides or placeholder")
+    }
+
+    /// The normals seen from each side, or their placeholder.
+    pub fn side_normals_or_placeholder(&self) -> &Arc<Image> {
+        self.side_normals.as_ref().or(self.side_normals_placeholder.as_ref()).expect("side normals or placeholder")
     }
 }
 

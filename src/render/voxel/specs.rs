@@ -64,6 +64,8 @@ pub struct VolumeSpecs {
     pub flags_placeholder: Option<Alloc>,
     pub sides: Option<Alloc>,
     pub sides_placeholder: Option<Alloc>,
+    pub side_normals: Option<Alloc>,
+    pub side_normals_placeholder: Option<Alloc>,
     /// The voxelization's sums (R32_UINT).
     pub sums: Vec<Alloc>,
     /// The direct radiance (RGBA16F, sampled; pool 0 at 9^3 per slot, with the apron).
@@ -127,6 +129,8 @@ impl VolumeSpecs {
             flags_placeholder: (!needs.dynamic).then(|| placeholder(F::R8_UINT, false)),
             sides: needs.sides.then(|| volume(F::R32_UINT)),
             sides_placeholder: (!needs.sides).then(|| placeholder(F::R32_UINT, false)),
+            side_normals: needs.sides.then(|| volume(F::R32G32B32A32_UINT)),
+            side_normals_placeholder: (!needs.sides).then(|| placeholder(F::R32G32B32A32_UINT, false)),
             sums: sum_word_indices(needs).iter().map(|_| volume(F::R32_UINT)).collect(),
             radiance,
             bounced: if needs.bounces > 0 { vec![radiance, volume(RADIANCE_VOLUME_FORMAT)] } else { Vec::new() },
@@ -158,6 +162,8 @@ impl VolumeSpecs {
         out.extend(self.flags_placeholder);
         out.extend(self.sides);
         out.extend(self.sides_placeholder);
+        out.extend(self.side_normals);
+        out.extend(self.side_normals_placeholder);
         out.extend(&self.sums);
         out.push(self.radiance);
         out.extend(&self.bounced);
