@@ -117,8 +117,7 @@ const float ONE_PLANE = 0.9;
 
 // The six side factors of a voxel (side j faces +x, -x, +y, -y, +z, -z for j = 0..5): the light
 // of its faces seen from that side (side_normal below) over the light of its mean normal, each
-// in 5 bits as
-// k * 16, so 0..1.9375 in steps of 1/16; 16 (1) where nothing changes.
+// in 5 bits as k * 16, so 0..1.9375 in steps of 1/16; 16 (1) where nothing changes.
 uint pack_sides(float k[6]) {
     uint word = 0u;
     for (int j = 0; j < 6; ++j) word |= uint(round(clamp(k[j], 0.0, 31.0 / 16.0) * 16.0)) << (5 * j);
