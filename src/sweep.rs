@@ -84,6 +84,9 @@ pub enum Param {
     /// `gi.voxel_cover`, how opaque a voxel its surfaces make, by name (index in
     /// [`VOXEL_COVERS`]).
     VoxelCover,
+    /// `gi.footprint`, how a cone's samples composite its footprint, by name (index in
+    /// [`FOOTPRINTS`]).
+    Footprint,
 }
 
 /// The `gi.mode` values a sweep can compare, in the order of their index as a knob value.
@@ -108,8 +111,15 @@ pub const OPACITIES: [&str; 2] = ["blend", "layers"];
 /// The `gi.voxel_cover` values, in the order of their index as a knob value.
 pub const VOXEL_COVERS: [&str; 3] = ["touch", "area", "directional"];
 
+/// The `gi.footprint` values, in the order of their index as a knob value.
+pub const FOOTPRINTS: [&str; 2] = ["whole", "quadrants"];
+
 fn touch() -> String {
     "touch".to_owned()
+}
+
+fn whole() -> String {
+    "whole".to_owned()
 }
 
 fn blend() -> String {
@@ -146,7 +156,7 @@ fn vct() -> String {
 }
 
 impl Param {
-    pub const ALL: [Param; 22] = [
+    pub const ALL: [Param; 23] = [
         Param::VoxelResolution,
         Param::DiffuseCones,
         Param::DiffuseConeAngle,
@@ -169,6 +179,7 @@ impl Param {
         Param::Shadows,
         Param::Opacity,
         Param::VoxelCover,
+        Param::Footprint,
     ];
     /// The key under `[gi]`.
     pub fn key(self) -> &'static str {
@@ -195,6 +206,7 @@ impl Param {
             Param::Shadows => "shadows",
             Param::Opacity => "opacity",
             Param::VoxelCover => "voxel_cover",
+            Param::Footprint => "footprint",
         }
     }
     /// Short prefix in configuration labels.
@@ -222,6 +234,7 @@ impl Param {
             Param::Shadows => "shadow-",
             Param::Opacity => "op-",
             Param::VoxelCover => "cover-",
+            Param::Footprint => "fp-",
         }
     }
     /// The names a knob's values are written as, for knobs that take names.
@@ -233,6 +246,7 @@ impl Param {
             Param::Shadows => Some(&SHADOW_KINDS),
             Param::Opacity => Some(&OPACITIES),
             Param::VoxelCover => Some(&VOXEL_COVERS),
+            Param::Footprint => Some(&FOOTPRINTS),
             _ => None,
         }
     }
@@ -443,6 +457,9 @@ pub struct Row {
     /// `gi.voxel_cover` ("touch" in rows from before it was recorded).
     #[serde(default = "touch")]
     pub voxel_cover: String,
+    /// `gi.footprint` ("whole" in rows from before it was recorded).
+    #[serde(default = "whole")]
+    pub footprint: String,
     /// Median host wall clock of a frame that updates the voxels (relight, mips, bounces)
     /// and traces: the cost when lights or objects move. The front is drawn against this.
     pub frame_ms: f64,
@@ -491,6 +508,7 @@ impl Row {
             shadows: s.shadows.name().to_owned(),
             opacity: serde_name(s.opacity).unwrap_or_else(blend),
             voxel_cover: serde_name(s.voxel_cover).unwrap_or_else(touch),
+            footprint: serde_name(s.footprint).unwrap_or_else(whole),
             frame_ms: time[0],
             frame_p95_ms: time[1],
             static_frame_ms: time[2],
@@ -582,6 +600,7 @@ impl Row {
             Param::Shadows => name_index(&SHADOW_KINDS, &self.shadows),
             Param::Opacity => name_index(&OPACITIES, &self.opacity),
             Param::VoxelCover => name_index(&VOXEL_COVERS, &self.voxel_cover),
+            Param::Footprint => name_index(&FOOTPRINTS, &self.footprint),
         }
     }
 }
@@ -1103,6 +1122,12 @@ mod tests {
         let settings = crate::scene::GiSettings { shadows: crate::scene::DirectShadows::Rt, ..Default::default() };
         let r = Row::new("shadow-rt".into(), &settings, [1.0; 3], 1.0, &c);
         assert_eq!((r.knob(Param::Shadows), r.shadows.as_str()), (2.0, "rt"));
+        let footprints = Grid::parse(&["footprint=whole,quadrants".into()]).unwrap().configs();
+        assert_eq!(footprints[1].overrides(), vec![("gi.footprint".to_string(), "\"quadrants\"".to_string())]);
+        assert_eq!(footprints[1].label(), "fp-quadrants");
+        let settings = crate::scene::GiSettings { footprint: crate::scene::Footprint::Quadrants, ..Default::default() };
+        let r = Row::new("fp-quadrants".into(), &settings, [1.0; 3], 1.0, &c);
+        assert_eq!((r.knob(Param::Footprint), r.footprint.as_str()), (1.0, "quadrants"));
     }
 
     fn row(label: &str, ms: f64, rmse: f64, ssim: f64) -> Row {

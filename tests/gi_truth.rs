@@ -454,6 +454,41 @@ fn two_tap_cone_samples_keep_walls_opaque_and_partial_cover_partial() {
     assert!((b - 1.0).abs() < (a - 1.0).abs(), "indirect energy: trilinear {a:.3}, two-tap {b:.3}");
 }
 
+/// `gi.footprint = "quadrants"`: each quarter of a cone's footprint composites its own
+/// transmittance. Walls stay opaque (the closed emissive box still returns rho Le per bounce),
+/// and a wall beside a cone's axis blocks the quarters it covers once instead of a little more
+/// of the whole footprint at every sample, so the Cornell box's walls and ceiling, too bright
+/// with one transmittance per cone (ACCURACY.md), lose most of their excess.
+#[test]
+fn quadrant_footprints_keep_walls_opaque_and_count_a_wall_beside_the_cone_once() {
+    let ctx = context();
+    let (rho, le) = (0.5f32, 1.0f32);
+    let mut furnace = furnace(rho, le);
+    furnace.settings.gi.bounces = 0;
+    furnace.settings.gi.footprint = dvsgi::scene::Footprint::Quadrants;
+    furnace.settings.view = dvsgi::scene::View::Indirect;
+    let (out, _) = render(&ctx, furnace);
+    let mean = out.radiance.chunks_exact(4).map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0).sum::<f64>()
+        / (out.radiance.len() / 4) as f64;
+    eprintln!("one bounce by quadrant cones in the closed box: {mean:.4} (rho Le = {})", rho * le);
+    assert!((mean / (rho * le) as f64 - 1.0).abs() < 0.06, "quadrants: {mean:.4} vs {}", rho * le);
+
+    let truth = minus(&data("cornell-64.exr"), &data("cornell-64-direct.exr"));
+    let indirect = |footprint: &str| {
+        let (out, scene) = render(&ctx, cornell(&[("render.view", "\"indirect\""), ("gi.footprint", footprint)]));
+        let map = RegionMap::trace(&scene, 64, 64);
+        region_stats(&map, &Pair { test: &linear(&out), reference: &truth, reference_variance: None })
+    };
+    let (whole, quarters) = (indirect("\"whole\""), indirect("\"quadrants\""));
+    for name in ["ceiling -y", "backWall -z", "leftWall -x", "rightWall +x"] {
+        let region = format!("box/{name}");
+        let (a, b) =
+            (stats(&whole, Grouping::Surface, &region).ratio, stats(&quarters, Grouping::Surface, &region).ratio);
+        eprintln!("{name}: indirect {a:.3} of the reference's with whole footprints, {b:.3} with quadrants");
+        assert!(a > 1.0 && b < a - 0.03 && b > 0.9, "{name}: whole {a:.3}, quadrants {b:.3}");
+    }
+}
+
 /// A shadow-casting sun of irradiance 3 travelling along `direction`.
 fn sun(direction: Vec3) -> dvsgi::scene::Light {
     dvsgi::scene::Light {

@@ -252,6 +252,47 @@ vec4 cone_segment(vec4 smp, float depth) {
     return vec4(max(smp.rgb, vec3(0.0)) / tau * a, a);
 }
 
+bool quadrants() {
+    return (gi.counts.w & GI_FLAG_QUADRANTS) != 0u;
+}
+
+// gi.footprint = "quadrants": a sample of texel side s (a footprint of diameter 2s across the
+// cone) as four samples of side s/2, one on each quarter of the footprint, each quarter
+// compositing its own transmittance `quarter_t` along the path (so each step is beta times a
+// quarter's diameter, s: trace_cone). What covers one part of the footprint stays in that part:
+// a wall beside the cone's axis that sample after sample covers in part blocks the quarters it
+// covers once, rather than a little more of the whole footprint at every sample; and a side
+// wall and a roof that cover different parts leave no part open. Each quarter is a narrower
+// cone from the same apex, its axis tan_half / 2 off the cone's toward its quarter: it samples
+// the directional volumes along that axis, so a quarter that drifts across a wall beside the
+// cone crosses it as its rays do (seen along the cone's own axis, a wall parallel to it is
+// only as opaque as its share of the texel). Returns what the step adds to the whole cone,
+// (premultiplied radiance, opacity), relative to the transmittance the cone had before, as
+// cone_segment does, so the caller composites it as one segment. Below s = 2 (texels of one
+// voxel) the quarters share one full-resolution sample.
+vec4 quadrant_segment(vec3 p, vec3 dir, float tan_half, mat3 across, float s, float step_len, inout vec4 quarter_t) {
+    float before = dot(quarter_t, vec4(0.25));
+    if (before <= 0.0) return vec4(0.0);
+    vec3 radiance = vec3(0.0);
+    if (s < 2.0) {
+        vec4 seg = cone_segment(sample_voxels(p, dir, log2(s)), step_len / s);
+        radiance = before * seg.rgb;
+        quarter_t *= 1.0 - seg.a;
+    } else {
+        float q = 0.5 * s;
+        for (int k = 0; k < 4; ++k) {
+            vec2 side = vec2((k & 1) == 0 ? -q : q, (k & 2) == 0 ? -q : q);
+            vec3 pk = p + across[0] * side.x + across[1] * side.y;
+            vec3 dk = normalize(dir + (across[0] * sign(side.x) + across[1] * sign(side.y)) * (0.5 * tan_half));
+            vec4 seg = cone_segment(sample_voxels(pk, dk, log2(q)), step_len / q);
+            radiance += 0.25 * quarter_t[k] * seg.rgb;
+            quarter_t[k] *= 1.0 - seg.a;
+        }
+    }
+    float after = dot(quarter_t, vec4(0.25));
+    return vec4(radiance, before - after) / before;
+}
+
 struct ConeResult {
     vec3 radiance;    // radiance arriving along the cone from the voxels (front-to-back composited)
     float opacity;    // accumulated opacity
@@ -290,7 +331,8 @@ float clear_texel(ConeOrigin o, float l1, float h) {
 //   a wide cone samples a narrower footprint rather than its own surface. So no sample sees
 //   the surface it starts from, at any resolution.
 // * Steps are gi.step (beta) times the diameter, i.e. 2 beta texels; optical depth is summed
-//   over each step (voxel.glsl), so nothing leaks through walls between samples.
+//   over each step (voxel.glsl), so nothing leaks through walls between samples. With
+//   gi.footprint = "quadrants" the diameter is a quarter's (quadrant_segment).
 // * It ends at max_t, when opaque, or when its filter footprint has left the grid (which is
 //   transparent outside: nothing there is known to emit).
 // * A cone whose end lies outside the grid has left the scene: `sky` is the transmittance it
@@ -313,14 +355,19 @@ ConeResult trace_cone(ConeOrigin o, vec3 dir, float tan_half, float max_t) {
     float rise = dot(dir, o.n);  // height gained per voxel along the cone
     // max_t is measured from the surface point; the cone starts h0 off it.
     max_t -= h0 * max(rise, 0.0);
+    // gi.footprint = "quadrants": the transmittance of each quarter of the footprint.
+    vec4 quarter_t = vec4(1.0);
+    mat3 across = tangent_frame(dir);
+    bool quarters = quadrants();
     float t = 0.0;
     for (int i = 0; i < 1024 && t < max_t && r.opacity < 0.995; ++i) {
         vec3 p = g + dir * t;
         float s = max(1.0, tan_half * t);
         if (any(lessThan(p, vec3(-1.5 * s))) || any(greaterThan(p, vec3(res + 1.5 * s)))) break;
         s = min(s, clear_texel(o, l1, h0 + t * max(rise, 0.0)));
-        float step_len = 2.0 * beta * s;
-        vec4 seg = cone_segment(sample_voxels(p, dir, log2(s)), step_len / s);
+        float step_len = 2.0 * beta * (quarters && s >= 2.0 ? 0.5 * s : s);
+        vec4 seg = quarters ? quadrant_segment(p, dir, tan_half, across, s, step_len, quarter_t)
+                            : cone_segment(sample_voxels(p, dir, log2(s)), step_len / s);
         if (seg.a > 0.0) {
             r.radiance += (1.0 - r.opacity) * seg.rgb;
             r.occlusion += (1.0 - r.occlusion) * seg.a / (1.0 + falloff * t);
@@ -328,6 +375,7 @@ ConeResult trace_cone(ConeOrigin o, vec3 dir, float tan_half, float max_t) {
         }
         t += step_len;
     }
+    if (quarters) r.opacity = 1.0 - dot(quarter_t, vec4(0.25));
     vec3 end = g + dir * t;
     if (any(lessThan(end, vec3(0.0))) || any(greaterThan(end, vec3(res)))) r.sky = 1.0 - r.opacity;
     r.radiance = min(r.radiance, vec3(HALF_MAX));

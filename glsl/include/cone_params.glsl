@@ -14,5 +14,6 @@ struct GiParams {
 const uint GI_FLAG_AO = 1u;
 const uint GI_FLAG_TWO_TAP = 2u;
 const uint GI_FLAG_LAYERS = 4u;  // gi.opacity = "layers" (cone.glsl)
+const uint GI_FLAG_QUADRANTS = 8u;  // gi.footprint = "quadrants" (cone.glsl)
 
 #endif

@@ -6,7 +6,7 @@
 //! `E = pi * sum_i L_i / N`. Each cone's axis is the cosine-weighted mean direction of its cell
 //! and, unless an aperture is given, its aperture spans the cell's solid angle.
 
-use crate::scene::{ConeFilter, GiSettings, Opacity};
+use crate::scene::{ConeFilter, Footprint, GiSettings, Opacity};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
@@ -83,7 +83,7 @@ pub struct GpuGiParams {
     /// x tan(half aperture).
     pub cone_tan: [[f32; 4]; MAX_CONES],
     /// x diffuse cone count, y downsample factor, z directional mip levels, w flags (1 AO,
-    /// 2 two-tap filtering).
+    /// 2 two-tap filtering, 4 layers, 8 quadrants).
     pub counts: [u32; 4],
     /// x step factor beta, y max distance (voxels), z start offset (voxels), w AO falloff per
     /// voxel.
@@ -97,6 +97,8 @@ pub const GI_FLAG_AO: u32 = 1;
 pub const GI_FLAG_TWO_TAP: u32 = 2;
 /// `gi.opacity = "layers"` (glsl/include/cone.glsl).
 pub const GI_FLAG_LAYERS: u32 = 4;
+/// `gi.footprint = "quadrants"` (glsl/include/cone.glsl).
+pub const GI_FLAG_QUADRANTS: u32 = 8;
 
 impl GpuGiParams {
     /// The parameters for `gi` on a grid of `resolution` voxels of `voxel_size`, with
@@ -113,7 +115,8 @@ impl GpuGiParams {
             if gi.max_distance > 0.0 { gi.max_distance / voxel_size.max(f32::MIN_POSITIVE) } else { res * 3f32.sqrt() };
         let flags = if gi.ao { GI_FLAG_AO } else { 0 }
             | if gi.cone_filter == ConeFilter::TwoTap { GI_FLAG_TWO_TAP } else { 0 }
-            | if gi.opacity == Opacity::Layers { GI_FLAG_LAYERS } else { 0 };
+            | if gi.opacity == Opacity::Layers { GI_FLAG_LAYERS } else { 0 }
+            | if gi.footprint == Footprint::Quadrants { GI_FLAG_QUADRANTS } else { 0 };
         p.counts = [cones.len() as u32, gi.downsample, mip_levels, flags];
         p.trace = [gi.step, max_distance.min(res * 3f32.sqrt()), gi.start_offset, gi.ao_falloff / res];
         p.shadow =

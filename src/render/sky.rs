@@ -44,8 +44,8 @@ pub fn sky_use(scene: &Scene) -> Option<String> {
                 if gi.specular == SpecularSource::Rt { "; ray-traced reflections see it where they miss" } else { "" };
             let leak = if gi.opacity == Opacity::Blend {
                 "; with gi.opacity = \"blend\" a closed room under it gets 0.15-0.25 of the light it would with \
-                 its roof open (gi.opacity = \"layers\" with gi.voxel_cover = \"directional\": 0.024; \
-                 ACCURACY.md, \"Sky light and leaks\")"
+                 its roof open (gi.opacity = \"layers\" with gi.voxel_cover = \"directional\": 0.024, and \
+                 gi.footprint = \"quadrants\" too: 0.017; ACCURACY.md, \"Sky light and leaks\")"
             } else {
                 ""
             };

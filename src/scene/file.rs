@@ -404,6 +404,7 @@ pub(crate) const GI_KEYS: &[&str] = &[
     "shadow_cone_angle",
     "cone_filter",
     "opacity",
+    "footprint",
     "voxel_cover",
     "step",
     "max_distance",

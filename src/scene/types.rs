@@ -484,6 +484,22 @@ pub enum ConeFilter {
     TwoTap,
 }
 
+/// How much of a cone's footprint each of its samples keeps apart (glsl/include/cone.glsl,
+/// ACCURACY.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Footprint {
+    /// One sample per step over the whole footprint, composited with one transmittance: what
+    /// covers part of the footprint at sample after sample (a wall beside the cone) is counted
+    /// again each time, and parts covered in turn by different surfaces (a side wall, then a
+    /// roof) leave light through.
+    Whole,
+    /// Four samples per step at half the texel size, one on each quarter of the footprint,
+    /// each quarter compositing its own transmittance: cover stays where it is across the
+    /// cone. Four times the lookups.
+    Quadrants,
+}
+
 /// What a cone sample's optical depth is, from the three directional volumes it blends
 /// (glsl/include/cone.glsl, ACCURACY.md "Sky light and leaks").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -728,6 +744,9 @@ pub struct GiSettings {
     pub cone_filter: ConeFilter,
     /// How a cone sample's optical depth follows the walls it crosses (leaks: ACCURACY.md).
     pub opacity: Opacity,
+    /// Whether a cone's samples keep the parts of its footprint apart (partial cover along the
+    /// path: ACCURACY.md).
+    pub footprint: Footprint,
     /// How much of a voxel its surfaces make opaque (thin surfaces and narrow openings).
     pub voxel_cover: VoxelCover,
     /// Step along a cone as a fraction of its diameter (beta).
@@ -786,6 +805,7 @@ impl Default for GiSettings {
             shadow_cone_angle: 6.0,
             cone_filter: ConeFilter::Trilinear,
             opacity: Opacity::Blend,
+            footprint: Footprint::Whole,
             voxel_cover: VoxelCover::Touch,
             step: 0.5,
             max_distance: 0.0,
