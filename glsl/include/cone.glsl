@@ -268,8 +268,8 @@ bool quadrants() {
 // cone crosses it as its rays do (seen along the cone's own axis, a wall parallel to it is
 // only as opaque as its share of the texel). Returns what the step adds to the whole cone,
 // (premultiplied radiance, opacity), relative to the transmittance the cone had before, as
-// cone_segment does, so the caller composites it as one segment. Below s = 2 (texels of one
-// voxel) the quarters share one full-resolution sample.
+// cone_segment does, so the caller composites it as one segment. Below s = 2 (quarters of
+// texels under a voxel) the quarters share the whole footprint's one sample.
 vec4 quadrant_segment(vec3 p, vec3 dir, float tan_half, mat3 across, float s, float step_len, inout vec4 quarter_t) {
     float before = dot(quarter_t, vec4(0.25));
     if (before <= 0.0) return vec4(0.0);

@@ -495,8 +495,9 @@ pub enum Footprint {
     /// roof) leave light through.
     Whole,
     /// Four samples per step at half the texel size, one on each quarter of the footprint,
-    /// each quarter compositing its own transmittance: cover stays where it is across the
-    /// cone. Four times the lookups.
+    /// each quarter a narrower cone from the same apex compositing its own transmittance:
+    /// cover stays where it is across the cone. Steps half as long, so eight times the
+    /// lookups.
     Quadrants,
 }
 
