@@ -416,6 +416,27 @@ fn directional_cover_shows_a_plate_seen_edge_on_as_thin() {
     assert_no_validation_messages(&ctx);
 }
 
+/// The closed emissive box (rho 0.5, Le 1) seen through the cones alone, set up by `setup`:
+/// the mean of its indirect view, one bounce of rho Le when the walls stay opaque.
+fn furnace_one_bounce(ctx: &std::sync::Arc<dvsgi::gpu::Context>, setup: impl FnOnce(&mut Scene)) -> f64 {
+    let mut furnace = furnace(0.5, 1.0);
+    furnace.settings.gi.bounces = 0;
+    furnace.settings.view = dvsgi::scene::View::Indirect;
+    setup(&mut furnace);
+    let (out, _) = render(ctx, furnace);
+    out.radiance.chunks_exact(4).map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0).sum::<f64>()
+        / (out.radiance.len() / 4) as f64
+}
+
+/// The Cornell box's indirect light (64x64, 64^3) with `key = value`, against the cached
+/// reference's, by region.
+fn cornell_indirect_with(ctx: &std::sync::Arc<dvsgi::gpu::Context>, key: &str, value: &str) -> Vec<RegionStats> {
+    let truth = minus(&data("cornell-64.exr"), &data("cornell-64-direct.exr"));
+    let (out, scene) = render(ctx, cornell(&[("render.view", "\"indirect\""), (key, value)]));
+    let map = RegionMap::trace(&scene, 64, 64);
+    region_stats(&map, &Pair { test: &linear(&out), reference: &truth, reference_variance: None })
+}
+
 /// `gi.cone_filter = "two-tap"` (opacity filtered across each cone, optical depth along it):
 /// walls stay opaque (the closed emissive box still returns rho Le per bounce through the
 /// cones, as with trilinear samples), and a surface that covers part of a footprint no
@@ -424,23 +445,12 @@ fn directional_cover_shows_a_plate_seen_edge_on_as_thin() {
 #[test]
 fn two_tap_cone_samples_keep_walls_opaque_and_partial_cover_partial() {
     let ctx = context();
-    let (rho, le) = (0.5f32, 1.0f32);
-    let mut furnace = furnace(rho, le);
-    furnace.settings.gi.bounces = 0;
-    furnace.settings.gi.cone_filter = dvsgi::scene::ConeFilter::TwoTap;
-    furnace.settings.view = dvsgi::scene::View::Indirect;
-    let (out, _) = render(&ctx, furnace);
-    let mean = out.radiance.chunks_exact(4).map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0).sum::<f64>()
-        / (out.radiance.len() / 4) as f64;
-    eprintln!("one bounce by two-tap cones in the closed box: {mean:.4} (rho Le = {})", rho * le);
-    assert!((mean / (rho * le) as f64 - 1.0).abs() < 0.06, "two-tap: {mean:.4} vs {}", rho * le);
+    let rho_le = 0.5;
+    let mean = furnace_one_bounce(&ctx, |s| s.settings.gi.cone_filter = dvsgi::scene::ConeFilter::TwoTap);
+    eprintln!("one bounce by two-tap cones in the closed box: {mean:.4} (rho Le = {rho_le})");
+    assert!((mean / rho_le - 1.0).abs() < 0.06, "two-tap: {mean:.4} vs {rho_le}");
 
-    let truth = minus(&data("cornell-64.exr"), &data("cornell-64-direct.exr"));
-    let indirect = |filter: &str| {
-        let (out, scene) = render(&ctx, cornell(&[("render.view", "\"indirect\""), ("gi.cone_filter", filter)]));
-        let map = RegionMap::trace(&scene, 64, 64);
-        region_stats(&map, &Pair { test: &linear(&out), reference: &truth, reference_variance: None })
-    };
+    let indirect = |filter: &str| cornell_indirect_with(&ctx, "gi.cone_filter", filter);
     let (trilinear, two_tap) = (indirect("\"trilinear\""), indirect("\"two-tap\""));
     for name in ["backWall -z", "leftWall -x", "rightWall +x"] {
         let region = format!("box/{name}");
@@ -462,23 +472,12 @@ fn two_tap_cone_samples_keep_walls_opaque_and_partial_cover_partial() {
 #[test]
 fn quadrant_footprints_keep_walls_opaque_and_count_a_wall_beside_the_cone_once() {
     let ctx = context();
-    let (rho, le) = (0.5f32, 1.0f32);
-    let mut furnace = furnace(rho, le);
-    furnace.settings.gi.bounces = 0;
-    furnace.settings.gi.footprint = dvsgi::scene::Footprint::Quadrants;
-    furnace.settings.view = dvsgi::scene::View::Indirect;
-    let (out, _) = render(&ctx, furnace);
-    let mean = out.radiance.chunks_exact(4).map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0).sum::<f64>()
-        / (out.radiance.len() / 4) as f64;
-    eprintln!("one bounce by quadrant cones in the closed box: {mean:.4} (rho Le = {})", rho * le);
-    assert!((mean / (rho * le) as f64 - 1.0).abs() < 0.06, "quadrants: {mean:.4} vs {}", rho * le);
+    let rho_le = 0.5;
+    let mean = furnace_one_bounce(&ctx, |s| s.settings.gi.footprint = dvsgi::scene::Footprint::Quadrants);
+    eprintln!("one bounce by quadrant cones in the closed box: {mean:.4} (rho Le = {rho_le})");
+    assert!((mean / rho_le - 1.0).abs() < 0.06, "quadrants: {mean:.4} vs {rho_le}");
 
-    let truth = minus(&data("cornell-64.exr"), &data("cornell-64-direct.exr"));
-    let indirect = |footprint: &str| {
-        let (out, scene) = render(&ctx, cornell(&[("render.view", "\"indirect\""), ("gi.footprint", footprint)]));
-        let map = RegionMap::trace(&scene, 64, 64);
-        region_stats(&map, &Pair { test: &linear(&out), reference: &truth, reference_variance: None })
-    };
+    let indirect = |footprint: &str| cornell_indirect_with(&ctx, "gi.footprint", footprint);
     let (whole, quarters) = (indirect("\"whole\""), indirect("\"quadrants\""));
     for name in ["ceiling -y", "backWall -z", "leftWall -x", "rightWall +x"] {
         let region = format!("box/{name}");
