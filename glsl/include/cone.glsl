@@ -13,6 +13,7 @@
 // Positions are in voxel units: 0..res along each axis of the grid.
 #ifndef DVSGI_CONE_GLSL
 #define DVSGI_CONE_GLSL
+#extension GL_EXT_control_flow_attributes : require
 #include "common.glsl"
 #include "voxel.glsl"
 #include "bricks.glsl"
@@ -63,12 +64,13 @@ vec4 axis_blend(vec4 x, vec4 y, vec4 z, vec3 dir) {
     return vec4(weighted / sum * rate, rate);
 }
 
-// The directional volumes at integer level l, blended by the squared components of `dir`.
-vec4 anisotropic_level(vec3 uvw, vec3 dir, int l) {
+// The directional volumes at level l, blended by the squared components of `dir` (the
+// direction the cone travels): the volume integrated along +x serves cones going +x. A dense
+// level (l >= the pooled levels) is sampled at lod `d` of the dense images: l minus the pooled
+// levels, or between it and the next (the sampler blends dense levels).
+vec4 anisotropic_level(vec3 uvw, vec3 dir, int l, float d) {
     vec4 x, y, z;
-    int pooled = int(grid.dims.y);
-    if (l >= pooled) {
-        float d = float(l - pooled);
+    if (l >= int(grid.dims.y)) {
         x = dir.x >= 0.0 ? textureLod(aniso[0], uvw, d) : textureLod(aniso[1], uvw, d);
         y = dir.y >= 0.0 ? textureLod(aniso[2], uvw, d) : textureLod(aniso[3], uvw, d);
         z = dir.z >= 0.0 ? textureLod(aniso[4], uvw, d) : textureLod(aniso[5], uvw, d);
@@ -84,23 +86,21 @@ vec4 anisotropic_level(vec3 uvw, vec3 dir, int l) {
     return axis_blend(x, y, z, dir);
 }
 
-// The directional volumes at `level`, blended by the squared components of `dir` (the
-// direction the cone travels): the volume integrated along +x serves cones going +x.
-// Returns (L * tau, tau) (voxel.glsl). Dense levels blend between levels in the sampler;
-// pooled ones (one image per level) here.
+// The directional volumes at fractional `level`, blended by the squared components of `dir`.
+// Returns (L * tau, tau) (voxel.glsl). Dense levels blend between levels in the sampler (one
+// lookup); pooled ones (one image per level) here, the two levels in a loop that calls
+// anisotropic_level once (every call site is a copy of it in the compiled shader: footprint_segment).
 vec4 sample_anisotropic(vec3 uvw, vec3 dir, float level) {
     int pooled = int(grid.dims.y);
-    if (float(pooled) <= level) {
-        float d = level - float(pooled);
-        vec4 x = dir.x >= 0.0 ? textureLod(aniso[0], uvw, d) : textureLod(aniso[1], uvw, d);
-        vec4 y = dir.y >= 0.0 ? textureLod(aniso[2], uvw, d) : textureLod(aniso[3], uvw, d);
-        vec4 z = dir.z >= 0.0 ? textureLod(aniso[4], uvw, d) : textureLod(aniso[5], uvw, d);
-        return axis_blend(x, y, z, dir);
+    bool dense = float(pooled) <= level;
+    int l = dense ? pooled : int(floor(level));
+    float f = dense ? 0.0 : level - float(l);
+    vec4 a = vec4(0.0);
+    [[dont_unroll]] for (int k = 0; k < (f > 0.0 ? 2 : 1); ++k) {
+        vec4 v = anisotropic_level(uvw, dir, l + k, dense ? level - float(pooled) : float(l + k - pooled));
+        a = k == 0 ? v : mix(a, v, f);
     }
-    int l = int(floor(level));
-    float f = level - float(l);
-    vec4 a = anisotropic_level(uvw, dir, l);
-    return f > 0.0 ? mix(a, anisotropic_level(uvw, dir, l + 1), f) : a;
+    return a;
 }
 
 // The full-resolution radiance, trilinear, one hardware lookup in both layouts: bricked, in
@@ -188,8 +188,12 @@ vec4 two_tap_level(vec3 uvw, vec3 dir, int l) {
 vec4 two_tap_directional(vec3 uvw, vec3 dir, float level) {
     int l = int(floor(level));
     float f = level - float(l);
-    vec4 a = two_tap_level(uvw, dir, l);
-    return f > 0.0 ? mix(a, two_tap_level(uvw, dir, l + 1), f) : a;
+    vec4 a = vec4(0.0);
+    [[dont_unroll]] for (int k = 0; k < (f > 0.0 ? 2 : 1); ++k) {
+        vec4 v = two_tap_level(uvw, dir, l + k);
+        a = k == 0 ? v : mix(a, v, f);
+    }
+    return a;
 }
 
 // Opacity of an occupied full-resolution voxel: optical depth opaque_tau().
@@ -232,15 +236,17 @@ vec4 sample_voxels(vec3 g, vec3 dir, float lod) {
     vec3 uvw = g / float(grid.dims.x);
     float top = float(gi.counts.z);  // lod of the last directional level + 1
     lod = clamp(lod, 0.0, top);
-    if ((gi.counts.w & GI_FLAG_TWO_TAP) != 0u) {
-        if (lod >= 1.0) return two_tap_directional(uvw, dir, lod - 1.0);
-        vec4 full = two_tap_full(uvw, dir);
-        return lod <= 0.0 ? full : mix(full, two_tap_directional(uvw, dir, 0.0), lod);
+    bool two_tap = (gi.counts.w & GI_FLAG_TWO_TAP) != 0u;
+    // Each sampler is called at one place (footprint_segment says why).
+    vec4 full = vec4(0.0), directional = vec4(0.0);
+    if (lod < 1.0) {
+        // Occupied full-resolution voxels (radiance L, alpha 1) have optical depth opaque_tau().
+        full = two_tap ? two_tap_full(uvw, dir) : sample_full(uvw) * opaque_tau();
+        if (lod <= 0.0) return full;
     }
-    if (lod >= 1.0) return sample_anisotropic(uvw, dir, lod - 1.0);
-    // Occupied full-resolution voxels (radiance L, alpha 1) have optical depth opaque_tau().
-    vec4 full = sample_full(uvw) * opaque_tau();
-    return lod <= 0.0 ? full : mix(full, sample_anisotropic(uvw, dir, 0.0), lod);
+    float level = max(lod - 1.0, 0.0);
+    directional = two_tap ? two_tap_directional(uvw, dir, level) : sample_anisotropic(uvw, dir, level);
+    return lod >= 1.0 ? directional : mix(full, directional, lod);
 }
 
 // What a path of `depth` texels through sample `smp` (L * tau, tau) adds: premultiplied
@@ -256,35 +262,46 @@ bool quadrants() {
     return (gi.counts.w & GI_FLAG_QUADRANTS) != 0u;
 }
 
-// gi.footprint = "quadrants": a sample of texel side s (a footprint of diameter 2s across the
-// cone) as four samples of side s/2, one on each quarter of the footprint, each quarter
-// compositing its own transmittance `quarter_t` along the path (so each step is beta times a
-// quarter's diameter, s: trace_cone). What covers one part of the footprint stays in that part:
-// a wall beside the cone's axis that sample after sample covers in part blocks the quarters it
-// covers once, rather than a little more of the whole footprint at every sample; and a side
-// wall and a roof that cover different parts leave no part open. Each quarter is a narrower
-// cone from the same apex, its axis tan_half / 2 off the cone's toward its quarter: it samples
-// the directional volumes along that axis, so a quarter that drifts across a wall beside the
-// cone crosses it as its rays do (seen along the cone's own axis, a wall parallel to it is
-// only as opaque as its share of the texel). Returns what the step adds to the whole cone,
-// (premultiplied radiance, opacity), relative to the transmittance the cone had before, as
-// cone_segment does, so the caller composites it as one segment. Below s = 2 (quarters of
-// texels under a voxel) the quarters share the whole footprint's one sample.
-vec4 quadrant_segment(vec3 p, vec3 dir, float tan_half, mat3 across, float s, float step_len, inout vec4 quarter_t) {
-    float before = dot(quarter_t, vec4(0.25));
+// One step of a cone: what a path of `step_len` voxels through the footprint of texel side s
+// at p adds, (premultiplied radiance, opacity), relative to the transmittance the cone had
+// before, so the caller composites it as one segment (cone_segment).
+//
+// gi.footprint = "quadrants" (`quarters`): the footprint (diameter 2s across the cone) as four
+// samples of side s/2, one on each quarter, each quarter compositing its own transmittance
+// `quarter_t` along the path (so each step is beta times a quarter's diameter, s: trace_cone).
+// What covers one part of the footprint stays in that part: a wall beside the cone's axis that
+// sample after sample covers in part blocks the quarters it covers once, rather than a little
+// more of the whole footprint at every sample; and a side wall and a roof that cover different
+// parts leave no part open. Each quarter is a narrower cone from the same apex, its axis
+// tan_half / 2 off the cone's toward its quarter: it samples the directional volumes along
+// that axis, so a quarter that drifts across a wall beside the cone crosses it as its rays do
+// (seen along the cone's own axis, a wall parallel to it is only as opaque as its share of the
+// texel). Below s = 2 (quarters of texels under a voxel) the quarters share the whole
+// footprint's one sample.
+//
+// One call of sample_voxels, in a loop the compiler keeps (one part, or four): every call site
+// is a copy of the whole sampler in the compiled shader, and a CPU driver (lavapipe) compiles
+// each copy, per pipeline, on a test machine's first frame.
+vec4 footprint_segment(vec3 p, vec3 dir, float tan_half, mat3 across, float s, float step_len, bool quarters,
+                       inout vec4 quarter_t) {
+    float before = quarters ? dot(quarter_t, vec4(0.25)) : 1.0;
     if (before <= 0.0) return vec4(0.0);
+    int parts = quarters && s >= 2.0 ? 4 : 1;
+    float q = parts == 4 ? 0.5 * s : s;
     vec3 radiance = vec3(0.0);
-    if (s < 2.0) {
-        vec4 seg = cone_segment(sample_voxels(p, dir, log2(s)), step_len / s);
-        radiance = before * seg.rgb;
-        quarter_t *= 1.0 - seg.a;
-    } else {
-        float q = 0.5 * s;
-        for (int k = 0; k < 4; ++k) {
+    [[dont_unroll]] for (int k = 0; k < parts; ++k) {
+        vec3 pk = p, dk = dir;
+        if (parts == 4) {
             vec2 side = vec2((k & 1) == 0 ? -q : q, (k & 2) == 0 ? -q : q);
-            vec3 pk = p + across[0] * side.x + across[1] * side.y;
-            vec3 dk = normalize(dir + (across[0] * sign(side.x) + across[1] * sign(side.y)) * (0.5 * tan_half));
-            vec4 seg = cone_segment(sample_voxels(pk, dk, log2(q)), step_len / q);
+            pk = p + across[0] * side.x + across[1] * side.y;
+            dk = normalize(dir + (across[0] * sign(side.x) + across[1] * sign(side.y)) * (0.5 * tan_half));
+        }
+        vec4 seg = cone_segment(sample_voxels(pk, dk, log2(q)), step_len / q);
+        if (!quarters) return seg;
+        if (parts == 1) {
+            radiance = before * seg.rgb;
+            quarter_t *= 1.0 - seg.a;
+        } else {
             radiance += 0.25 * quarter_t[k] * seg.rgb;
             quarter_t[k] *= 1.0 - seg.a;
         }
@@ -332,7 +349,7 @@ float clear_texel(ConeOrigin o, float l1, float h) {
 //   the surface it starts from, at any resolution.
 // * Steps are gi.step (beta) times the diameter, i.e. 2 beta texels; optical depth is summed
 //   over each step (voxel.glsl), so nothing leaks through walls between samples. With
-//   gi.footprint = "quadrants" the diameter is a quarter's (quadrant_segment).
+//   gi.footprint = "quadrants" the diameter is a quarter's (footprint_segment).
 // * It ends at max_t, when opaque, or when its filter footprint has left the grid (which is
 //   transparent outside: nothing there is known to emit).
 // * A cone whose end lies outside the grid has left the scene: `sky` is the transmittance it
@@ -366,8 +383,7 @@ ConeResult trace_cone(ConeOrigin o, vec3 dir, float tan_half, float max_t) {
         if (any(lessThan(p, vec3(-1.5 * s))) || any(greaterThan(p, vec3(res + 1.5 * s)))) break;
         s = min(s, clear_texel(o, l1, h0 + t * max(rise, 0.0)));
         float step_len = 2.0 * beta * (quarters && s >= 2.0 ? 0.5 * s : s);
-        vec4 seg = quarters ? quadrant_segment(p, dir, tan_half, across, s, step_len, quarter_t)
-                            : cone_segment(sample_voxels(p, dir, log2(s)), step_len / s);
+        vec4 seg = footprint_segment(p, dir, tan_half, across, s, step_len, quarters, quarter_t);
         if (seg.a > 0.0) {
             r.radiance += (1.0 - r.opacity) * seg.rgb;
             r.occlusion += (1.0 - r.occlusion) * seg.a / (1.0 + falloff * t);
