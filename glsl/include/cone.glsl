@@ -238,14 +238,14 @@ vec4 sample_voxels(vec3 g, vec3 dir, float lod) {
     lod = clamp(lod, 0.0, top);
     bool two_tap = (gi.counts.w & GI_FLAG_TWO_TAP) != 0u;
     // Each sampler is called at one place (footprint_segment says why).
-    vec4 full = vec4(0.0), directional = vec4(0.0);
+    vec4 full = vec4(0.0);
     if (lod < 1.0) {
         // Occupied full-resolution voxels (radiance L, alpha 1) have optical depth opaque_tau().
         full = two_tap ? two_tap_full(uvw, dir) : sample_full(uvw) * opaque_tau();
         if (lod <= 0.0) return full;
     }
     float level = max(lod - 1.0, 0.0);
-    directional = two_tap ? two_tap_directional(uvw, dir, level) : sample_anisotropic(uvw, dir, level);
+    vec4 directional = two_tap ? two_tap_directional(uvw, dir, level) : sample_anisotropic(uvw, dir, level);
     return lod >= 1.0 ? directional : mix(full, directional, lod);
 }
 

@@ -20,6 +20,8 @@ pub mod shaders {
 
     #[cfg(test)]
     mod tests {
+        const OP_IMAGE_SAMPLE_EXPLICIT_LOD: u32 = 88;
+
         /// How many `OpImageSampleExplicitLod` (textureLod) instructions a SPIR-V module holds.
         fn explicit_lod_samples(spirv: &[u8]) -> usize {
             let words: Vec<u32> = spirv.chunks_exact(4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]])).collect();
@@ -28,7 +30,7 @@ pub mod shaders {
             while at < words.len() {
                 let (count, opcode) = ((words[at] >> 16) as usize, words[at] & 0xffff);
                 assert!(count > 0, "a zero-length instruction at word {at}");
-                n += usize::from(opcode == 88);
+                n += usize::from(opcode == OP_IMAGE_SAMPLE_EXPLICIT_LOD);
                 at += count;
             }
             n
@@ -37,8 +39,8 @@ pub mod shaders {
         /// GLSL inlines every call: each call site of the voxel sampler is a copy of it (its
         /// lookups) in the compiled shader, and a CPU driver compiles every copy on a machine's
         /// first frame. Five copies per cone step, each with four of the directional level
-        /// sampler, took a cold lavapipe run from 12 s to 37 s of compiling and the test suite
-        /// from 36 to 71 minutes (BENCHMARKS.md, "What the cone tracer costs to compile").
+        /// sampler, took a cold lavapipe render of the Cornell box (16x16, no bounce) from 13 s
+        /// to 37 s and the test suite from 36 to 71 minutes (BENCHMARKS.md, "What the cone tracer costs to compile").
         /// `voxel_bounce` traces cones at one place: one copy of the sampler, 78 lookups (306
         /// before); `gi_trace` at three (diffuse, specular, shadow cones): 232 (916 before).
         #[test]
