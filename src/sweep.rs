@@ -87,6 +87,9 @@ pub enum Param {
     /// `gi.footprint`, how a cone's samples composite its footprint, by name (index in
     /// [`FOOTPRINTS`]).
     Footprint,
+    /// `gi.attenuation`, how the voxel light turns with the voxel's faces, by name (index in
+    /// [`ATTENUATIONS`]).
+    Attenuation,
 }
 
 /// The `gi.mode` values a sweep can compare, in the order of their index as a knob value.
@@ -113,6 +116,9 @@ pub const VOXEL_COVERS: [&str; 3] = ["touch", "area", "directional"];
 
 /// The `gi.footprint` values, in the order of their index as a knob value.
 pub const FOOTPRINTS: [&str; 2] = ["whole", "quadrants"];
+
+/// The `gi.attenuation` values, in the order of their index as a knob value.
+pub const ATTENUATIONS: [&str; 3] = ["normal-weighted", "n-dot-l", "per-side"];
 
 fn touch() -> String {
     "touch".to_owned()
@@ -156,7 +162,7 @@ fn vct() -> String {
 }
 
 impl Param {
-    pub const ALL: [Param; 23] = [
+    pub const ALL: [Param; 24] = [
         Param::VoxelResolution,
         Param::DiffuseCones,
         Param::DiffuseConeAngle,
@@ -180,6 +186,7 @@ impl Param {
         Param::Opacity,
         Param::VoxelCover,
         Param::Footprint,
+        Param::Attenuation,
     ];
     /// The key under `[gi]`.
     pub fn key(self) -> &'static str {
@@ -207,6 +214,7 @@ impl Param {
             Param::Opacity => "opacity",
             Param::VoxelCover => "voxel_cover",
             Param::Footprint => "footprint",
+            Param::Attenuation => "attenuation",
         }
     }
     /// Short prefix in configuration labels.
@@ -235,6 +243,7 @@ impl Param {
             Param::Opacity => "op-",
             Param::VoxelCover => "cover-",
             Param::Footprint => "fp-",
+            Param::Attenuation => "att-",
         }
     }
     /// The names a knob's values are written as, for knobs that take names.
@@ -247,6 +256,7 @@ impl Param {
             Param::Opacity => Some(&OPACITIES),
             Param::VoxelCover => Some(&VOXEL_COVERS),
             Param::Footprint => Some(&FOOTPRINTS),
+            Param::Attenuation => Some(&ATTENUATIONS),
             _ => None,
         }
     }
@@ -377,7 +387,7 @@ impl Config {
 }
 
 /// A knob value as written: a technique's name, else the number.
-fn value_text(p: Param, v: f64) -> String {
+pub fn value_text(p: Param, v: f64) -> String {
     match p.names() {
         Some(names) => names.get(v as usize).copied().unwrap_or("?").to_owned(),
         None => fmt_value(v),
@@ -460,6 +470,10 @@ pub struct Row {
     /// `gi.footprint` ("whole" in rows from before it was recorded).
     #[serde(default = "whole")]
     pub footprint: String,
+    /// `gi.attenuation` (empty in rows from before it was recorded: the default has changed,
+    /// so their value is not known).
+    #[serde(default)]
+    pub attenuation: String,
     /// Median host wall clock of a frame that updates the voxels (relight, mips, bounces)
     /// and traces: the cost when lights or objects move. The front is drawn against this.
     pub frame_ms: f64,
@@ -509,6 +523,7 @@ impl Row {
             opacity: serde_name(s.opacity).unwrap_or_else(blend),
             voxel_cover: serde_name(s.voxel_cover).unwrap_or_else(touch),
             footprint: serde_name(s.footprint).unwrap_or_else(whole),
+            attenuation: serde_name(s.attenuation).unwrap_or_default(),
             frame_ms: time[0],
             frame_p95_ms: time[1],
             static_frame_ms: time[2],
@@ -601,8 +616,15 @@ impl Row {
             Param::Opacity => name_index(&OPACITIES, &self.opacity),
             Param::VoxelCover => name_index(&VOXEL_COVERS, &self.voxel_cover),
             Param::Footprint => name_index(&FOOTPRINTS, &self.footprint),
+            Param::Attenuation => name_index(&ATTENUATIONS, &self.attenuation),
         }
     }
+}
+
+/// Whether two rows hold a knob at the same value: an unrecorded one (NaN: `attenuation` in rows
+/// from before it was recorded) matches only another unrecorded one.
+fn same_knob(a: f64, b: f64) -> bool {
+    (a - b).abs() < 1e-9 || (a.is_nan() && b.is_nan())
 }
 
 /// The effect of each step of each swept knob (see [`KnobEffect`]).
@@ -615,7 +637,7 @@ pub fn knob_effects(grid: &Grid, rows: &[Row]) -> Vec<KnobEffect> {
             let (mut n, mut dms, mut dflip, mut drmse) = (0usize, 0.0, 0.0, 0.0);
             for a in rows.iter().filter(|r| (r.knob(*param) - from).abs() < 1e-9) {
                 let twin = rows.iter().find(|b| {
-                    (b.knob(*param) - to).abs() < 1e-9 && others.iter().all(|p| (b.knob(*p) - a.knob(*p)).abs() < 1e-9)
+                    (b.knob(*param) - to).abs() < 1e-9 && others.iter().all(|p| same_knob(b.knob(*p), a.knob(*p)))
                 });
                 if let Some(b) = twin {
                     n += 1;
@@ -1128,6 +1150,14 @@ mod tests {
         let settings = crate::scene::GiSettings { footprint: crate::scene::Footprint::Quadrants, ..Default::default() };
         let r = Row::new("fp-quadrants".into(), &settings, [1.0; 3], 1.0, &c);
         assert_eq!((r.knob(Param::Footprint), r.footprint.as_str()), (1.0, "quadrants"));
+        let attenuations = Grid::parse(&["attenuation=n-dot-l,per-side".into()]).unwrap().configs();
+        assert_eq!(attenuations[1].overrides(), vec![("gi.attenuation".to_string(), "\"per-side\"".to_string())]);
+        assert_eq!(attenuations[1].label(), "att-per-side");
+        let settings =
+            crate::scene::GiSettings { attenuation: crate::scene::VoxelAttenuation::PerSide, ..Default::default() };
+        let r = Row::new("att-per-side".into(), &settings, [1.0; 3], 1.0, &c);
+        assert_eq!((r.knob(Param::Attenuation), r.attenuation.as_str()), (2.0, "per-side"));
+        assert!(Grid::parse(&["attenuation=per-face".into()]).unwrap_err().to_string().contains("n-dot-l"));
     }
 
     fn row(label: &str, ms: f64, rmse: f64, ssim: f64) -> Row {
@@ -1173,6 +1203,45 @@ mod tests {
         assert!((e[0].delta_ms - 20.0).abs() < 1e-9 && (e[0].delta_rmse + 0.2).abs() < 1e-9);
         assert_eq!((e[1].knob, e[1].from, e[1].to), (Param::VoxelResolution, 128.0, 64.0));
         assert!((e[1].delta_ms - 40.0).abs() < 1e-9);
+        // Rows from before `attenuation` was recorded pair with each other, not with rows
+        // that name it.
+        let old: Vec<Row> = rows.iter().cloned().map(|r| Row { attenuation: String::new(), ..r }).collect();
+        assert_eq!(knob_effects(&grid, &old), e);
+        let mixed = vec![old[0].clone(), rows[1].clone(), rows[2].clone()];
+        assert!(knob_effects(&grid, &mixed).is_empty());
+    }
+
+    #[test]
+    fn rows_from_before_a_knob_was_recorded_still_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("results.csv");
+        write_rows(&path, &[row("a", 10.0, 0.5, 0.9)]).unwrap();
+        // Drop the attenuation and footprint columns, as a results.csv of an older dvsgi has them.
+        let text = std::fs::read_to_string(&path).unwrap();
+        let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+        let drop: Vec<usize> = header
+            .iter()
+            .enumerate()
+            .filter(|(_, h)| ["attenuation", "footprint"].contains(h))
+            .map(|(i, _)| i)
+            .collect();
+        assert_eq!(drop.len(), 2);
+        let older: String = text
+            .lines()
+            .map(|l| {
+                l.split(',')
+                    .enumerate()
+                    .filter(|(i, _)| !drop.contains(i))
+                    .map(|(_, f)| f)
+                    .collect::<Vec<_>>()
+                    .join(",")
+                    + "\n"
+            })
+            .collect();
+        std::fs::write(&path, older).unwrap();
+        let r = &read_rows(&path).unwrap()[0];
+        assert_eq!((r.footprint.as_str(), r.attenuation.as_str()), ("whole", ""));
+        assert!(r.knob(Param::Attenuation).is_nan());
     }
 
     #[test]

@@ -315,7 +315,7 @@ fn reference_writes_radiance_variance_and_display_and_refuses_bad_input() {
 fn presets_render_and_set_can_override_them() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("p.png");
-    for p in ["low", "medium", "high", "ultra"] {
+    for p in ["low", "medium", "high", "ultra", "max"] {
         ok(&dvsgi(&[
             "--preset",
             p,
@@ -332,4 +332,12 @@ fn presets_render_and_set_can_override_them() {
         ]));
     }
     fails(&dvsgi(&["--preset", "extreme", "info"]), 2);
+    // A preset is a whole point on the fronts: it sets the footprint too, and --set still wins.
+    let info = |args: &[&str]| ok(&dvsgi(&[&["info", "scenes/cornell-box.toml"], args].concat()));
+    let max = info(&["--preset", "max"]);
+    assert!(max.contains("footprint = \"quadrants\"") && max.contains("attenuation = \"per-side\""), "{max}");
+    let ultra = info(&["--preset", "ultra", "--set", "gi.footprint=\"quadrants\""]);
+    assert!(ultra.contains("footprint = \"quadrants\""), "{ultra}");
+    let low = info(&["--set", "gi.footprint=\"quadrants\"", "--preset", "low"]);
+    assert!(low.contains("footprint = \"quadrants\""), "--set applies after the preset: {low}");
 }

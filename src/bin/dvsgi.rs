@@ -189,7 +189,8 @@ The viewer exits at the end of the script; each script frame advances scene time
         /// rsm+lpv), rsm_samples, rsm_radius, rsm_size, lpv_resolution, lpv_steps, specular
         /// (off, cone, rt), specular_rays, rt_hit_indirect (cones, voxel), specular_history,
         /// shadows (shadow-map, cone, rt), opacity (blend, layers), voxel_cover (touch, area,
-        /// directional), footprint (whole, quadrants)). Sweeps with other grids into the same directory add their rows to one
+        /// directional), footprint (whole, quadrants), attenuation (normal-weighted, n-dot-l,
+        /// per-side)). Sweeps with other grids into the same directory add their rows to one
         /// frontier, e.g. the cone-tracing grid, then --grid mode=rsm ....
         /// Without --grid: the default grid of 216 configurations (ACCURACY.md).
         #[arg(long)]
@@ -577,13 +578,14 @@ fn print_regions(title: &str, stats: &[dvsgi::regions::RegionStats]) {
 }
 
 fn print_sweep(results: &dvsgi::sweep::Results) {
+    use dvsgi::sweep::value_text;
     outln!("each knob, one step up, averaged over rows that differ only in it:");
-    outln!("  {:<20} {:>14} {:>6} {:>10} {:>11} {:>11}", "knob", "step", "pairs", "d ms", "d FLIP", "d RMSE");
+    outln!("  {:<20} {:>26} {:>6} {:>10} {:>11} {:>11}", "knob", "step", "pairs", "d ms", "d FLIP", "d RMSE");
     for e in &results.knob_effects {
         outln!(
-            "  {:<20} {:>14} {:>6} {:>+10.1} {:>+11.5} {:>+11.5}",
+            "  {:<20} {:>26} {:>6} {:>+10.1} {:>+11.5} {:>+11.5}",
             e.knob.key(),
-            format!("{} -> {}", e.from, e.to),
+            format!("{} -> {}", value_text(e.knob, e.from), value_text(e.knob, e.to)),
             e.pairs,
             e.delta_ms,
             e.delta_flip,

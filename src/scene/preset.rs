@@ -10,6 +10,9 @@ pub enum Preset {
     Medium,
     High,
     Ultra,
+    /// Above the default: quadrant footprints and per-side voxel light, the most accurate cone
+    /// setting on both fronts, at four to five times `ultra`'s frame on lavapipe.
+    Max,
 }
 
 impl Preset {
@@ -23,15 +26,21 @@ impl Preset {
         // voxel one plane crosses, except at 64^3, where most of Sponza's voxels hold several
         // faces: the cosine of their mean normal misses the lit faces' light, which the
         // per-axis rule (their average, for faces along the axes) keeps (Sponza's FLIP 0.175
-        // against 0.200 with `medium`, ACCURACY.md).
-        let (voxels, cones, bounces, downsample, attenuation) = match self {
-            Preset::Low => ("32", "4", "1", "2", "\"n-dot-l\""),
-            Preset::Medium => ("64", "9", "1", "2", "\"normal-weighted\""),
-            Preset::High => ("64", "16", "1", "2", "\"normal-weighted\""),
-            Preset::Ultra => ("128", "16", "1", "1", "\"n-dot-l\""),
+        // against 0.200 with `medium`, ACCURACY.md). `max` keeps a transmittance per quarter of
+        // each cone's footprint and gives a voxel's sides the light of the faces each sees: at
+        // 128^3 the top of both fronts (ACCURACY.md, "Quadrant footprints and per-side light on
+        // the fronts"); at 64^3 neither is on them. Every preset sets the footprint, which
+        // costs more than any other knob.
+        let (voxels, cones, bounces, downsample, attenuation, footprint) = match self {
+            Preset::Low => ("32", "4", "1", "2", "\"n-dot-l\"", "\"whole\""),
+            Preset::Medium => ("64", "9", "1", "2", "\"normal-weighted\"", "\"whole\""),
+            Preset::High => ("64", "16", "1", "2", "\"normal-weighted\"", "\"whole\""),
+            Preset::Ultra => ("128", "16", "1", "1", "\"n-dot-l\"", "\"whole\""),
+            Preset::Max => ("128", "16", "1", "2", "\"per-side\"", "\"quadrants\""),
         };
-        let values: [(&str, &str); 9] = [
+        let values: [(&str, &str); 10] = [
             ("attenuation", attenuation),
+            ("footprint", footprint),
             ("voxel_resolution", voxels),
             ("diffuse_cones", cones),
             ("diffuse_cone_angle", "0"),
@@ -54,7 +63,7 @@ mod tests {
 
     #[test]
     fn every_preset_is_a_valid_gi_table_and_they_rise_in_cost() {
-        let mut last = (0, 0, 0, 0);
+        let mut last = (0, 0, 0, 0, 0);
         for p in Preset::value_variants() {
             let mut table = toml::Table::new();
             for (k, v) in p.overrides() {
@@ -64,9 +73,10 @@ mod tests {
             }
             let gi: crate::scene::GiSettings = table.try_into().expect("preset keys are [gi] keys");
             gi.validate().unwrap_or_else(|(k, m)| panic!("{p:?}: gi.{k}: {m}"));
-            // Each level costs more: more bounces, or as many on more voxels or with more cones
-            // or at full resolution.
-            let cost = (gi.bounces, gi.voxel_resolution, gi.diffuse_cones, 8 - gi.downsample);
+            // Each level costs more: more bounces, or as many on more voxels, or with quadrant
+            // footprints, or with more cones or at full resolution.
+            let quadrants = (gi.footprint == crate::scene::Footprint::Quadrants) as u32;
+            let cost = (gi.bounces, gi.voxel_resolution, quadrants, gi.diffuse_cones, 8 - gi.downsample);
             assert_eq!(gi.bounce_interleave, crate::scene::GiSettings::default().bounce_interleave);
             assert!(cost > last, "{p:?}");
             last = cost;
@@ -78,7 +88,7 @@ mod tests {
                     "ultra is the scene-file default"
                 );
                 assert_eq!(gi.bounce_interleave, d.bounce_interleave);
-                assert_eq!(gi.attenuation, d.attenuation);
+                assert_eq!((gi.attenuation, gi.footprint), (d.attenuation, d.footprint));
             }
         }
     }

@@ -170,7 +170,7 @@ fn parse_line(line: &str) -> Result<Command, String> {
         "gi" => Command::Set { key: "gi.mode".into(), value: format!("{:?}", one("a technique")?) },
         "view" => Command::Set { key: "render.view".into(), value: format!("{:?}", one("a view")?) },
         "schedule" => Command::Schedule(one("sync | async | async-lagged | async-pipelined")?.parse()?),
-        "preset" => Command::Preset(preset(one("low | medium | high | ultra")?)?),
+        "preset" => Command::Preset(preset(one("low | medium | high | ultra | max")?)?),
         "pause" => Command::Pause(true),
         "play" => Command::Pause(false),
         "capture" => Command::Capture(PathBuf::from(one("an output path without extension")?)),
@@ -198,7 +198,7 @@ fn numbers(verb: &str, args: &[&str], n: usize) -> Result<Vec<f32>, String> {
 
 fn preset(s: &str) -> Result<Preset, String> {
     use clap::ValueEnum;
-    Preset::from_str(s, true).map_err(|_| format!("unknown preset `{s}`: low | medium | high | ultra"))
+    Preset::from_str(s, true).map_err(|_| format!("unknown preset `{s}`: low | medium | high | ultra | max"))
 }
 
 #[cfg(test)]
