@@ -170,7 +170,7 @@ fn parse_line(line: &str) -> Result<Command, String> {
         "gi" => Command::Set { key: "gi.mode".into(), value: format!("{:?}", one("a technique")?) },
         "view" => Command::Set { key: "render.view".into(), value: format!("{:?}", one("a view")?) },
         "schedule" => Command::Schedule(one("sync | async | async-lagged | async-pipelined")?.parse()?),
-        "preset" => Command::Preset(preset(one("low | medium | high | ultra | max")?)?),
+        "preset" => Command::Preset(preset(one(&preset_names())?)?),
         "pause" => Command::Pause(true),
         "play" => Command::Pause(false),
         "capture" => Command::Capture(PathBuf::from(one("an output path without extension")?)),
@@ -198,7 +198,17 @@ fn numbers(verb: &str, args: &[&str], n: usize) -> Result<Vec<f32>, String> {
 
 fn preset(s: &str) -> Result<Preset, String> {
     use clap::ValueEnum;
-    Preset::from_str(s, true).map_err(|_| format!("unknown preset `{s}`: low | medium | high | ultra | max"))
+    Preset::from_str(s, true).map_err(|_| format!("unknown preset `{s}`: {}", preset_names()))
+}
+
+/// `low | medium | ...`: every preset, as the command line spells them.
+fn preset_names() -> String {
+    use clap::ValueEnum;
+    Preset::value_variants()
+        .iter()
+        .filter_map(|p| p.to_possible_value().map(|v| v.get_name().to_owned()))
+        .collect::<Vec<_>>()
+        .join(" | ")
 }
 
 #[cfg(test)]
@@ -231,6 +241,9 @@ mod tests {
         let e = parse("schedule later\n").unwrap_err().to_string();
         assert!(e.contains("line 1") && e.contains("later"), "{e}");
         assert!(parse("resize 0 10").is_err() && parse("fly 1 0 0 nan").is_err() && parse("set x").is_err());
+        let e = parse("preset extreme\n").unwrap_err().to_string();
+        assert!(e.contains("unknown preset `extreme`: low | medium | high | ultra | max"), "{e}");
+        assert_eq!(parse("preset MAX\n").unwrap().commands[0].1, Command::Preset(Preset::Max));
     }
 
     #[test]

@@ -276,9 +276,8 @@ fn schedule(ui: &mut egui::Ui, mode: Mode, actions: &mut Vec<Action>) {
 fn preset(ui: &mut egui::Ui, current: Option<Preset>, actions: &mut Vec<Action>) {
     let name = |p: Option<Preset>| p.map(|p| format!("{p:?}").to_lowercase()).unwrap_or_else(|| "scene file".into());
     egui::ComboBox::from_label("preset").selected_text(name(current)).show_ui(ui, |ui| {
-        for p in
-            [None, Some(Preset::Low), Some(Preset::Medium), Some(Preset::High), Some(Preset::Ultra), Some(Preset::Max)]
-        {
+        let presets = <Preset as clap::ValueEnum>::value_variants().iter().copied().map(Some);
+        for p in std::iter::once(None).chain(presets) {
             if ui.selectable_label(current == p, name(p)).clicked() && current != p {
                 actions.push(Action::Preset(p));
             }
