@@ -84,9 +84,11 @@ pub enum Param {
     /// `gi.voxel_cover`, how opaque a voxel its surfaces make, by name (index in
     /// [`VOXEL_COVERS`]).
     VoxelCover,
-    /// `gi.footprint`, how a cone's samples composite its footprint, by name (index in
+    /// `gi.footprint`, how a pixel's cones composite their footprints, by name (index in
     /// [`FOOTPRINTS`]).
     Footprint,
+    /// `gi.bounce_footprint`, the same for the voxel bounce's cones (index in [`FOOTPRINTS`]).
+    BounceFootprint,
     /// `gi.attenuation`, how the voxel light turns with the voxel's faces, by name (index in
     /// [`ATTENUATIONS`]).
     Attenuation,
@@ -162,7 +164,7 @@ fn vct() -> String {
 }
 
 impl Param {
-    pub const ALL: [Param; 24] = [
+    pub const ALL: [Param; 25] = [
         Param::VoxelResolution,
         Param::DiffuseCones,
         Param::DiffuseConeAngle,
@@ -186,6 +188,7 @@ impl Param {
         Param::Opacity,
         Param::VoxelCover,
         Param::Footprint,
+        Param::BounceFootprint,
         Param::Attenuation,
     ];
     /// The key under `[gi]`.
@@ -214,6 +217,7 @@ impl Param {
             Param::Opacity => "opacity",
             Param::VoxelCover => "voxel_cover",
             Param::Footprint => "footprint",
+            Param::BounceFootprint => "bounce_footprint",
             Param::Attenuation => "attenuation",
         }
     }
@@ -243,6 +247,7 @@ impl Param {
             Param::Opacity => "op-",
             Param::VoxelCover => "cover-",
             Param::Footprint => "fp-",
+            Param::BounceFootprint => "bfp-",
             Param::Attenuation => "att-",
         }
     }
@@ -255,7 +260,7 @@ impl Param {
             Param::Shadows => Some(&SHADOW_KINDS),
             Param::Opacity => Some(&OPACITIES),
             Param::VoxelCover => Some(&VOXEL_COVERS),
-            Param::Footprint => Some(&FOOTPRINTS),
+            Param::Footprint | Param::BounceFootprint => Some(&FOOTPRINTS),
             Param::Attenuation => Some(&ATTENUATIONS),
             _ => None,
         }
@@ -470,6 +475,10 @@ pub struct Row {
     /// `gi.footprint` ("whole" in rows from before it was recorded).
     #[serde(default = "whole")]
     pub footprint: String,
+    /// `gi.bounce_footprint` (empty in rows from before it was recorded: `footprint` then set
+    /// the bounce's too, so a row's value is not known from what it recorded).
+    #[serde(default)]
+    pub bounce_footprint: String,
     /// `gi.attenuation` (empty in rows from before it was recorded: the default has changed,
     /// so their value is not known).
     #[serde(default)]
@@ -523,6 +532,7 @@ impl Row {
             opacity: serde_name(s.opacity).unwrap_or_else(blend),
             voxel_cover: serde_name(s.voxel_cover).unwrap_or_else(touch),
             footprint: serde_name(s.footprint).unwrap_or_else(whole),
+            bounce_footprint: serde_name(s.bounce_footprint).unwrap_or_default(),
             attenuation: serde_name(s.attenuation).unwrap_or_default(),
             frame_ms: time[0],
             frame_p95_ms: time[1],
@@ -616,13 +626,14 @@ impl Row {
             Param::Opacity => name_index(&OPACITIES, &self.opacity),
             Param::VoxelCover => name_index(&VOXEL_COVERS, &self.voxel_cover),
             Param::Footprint => name_index(&FOOTPRINTS, &self.footprint),
+            Param::BounceFootprint => name_index(&FOOTPRINTS, &self.bounce_footprint),
             Param::Attenuation => name_index(&ATTENUATIONS, &self.attenuation),
         }
     }
 }
 
-/// Whether two rows hold a knob at the same value: an unrecorded one (NaN: `attenuation` in rows
-/// from before it was recorded) matches only another unrecorded one.
+/// Whether two rows hold a knob at the same value: an unrecorded one (NaN: `attenuation` or
+/// `bounce_footprint` in rows from before it was recorded) matches only another unrecorded one.
 fn same_knob(a: f64, b: f64) -> bool {
     (a - b).abs() < 1e-9 || (a.is_nan() && b.is_nan())
 }
@@ -1150,6 +1161,14 @@ mod tests {
         let settings = crate::scene::GiSettings { footprint: crate::scene::Footprint::Quadrants, ..Default::default() };
         let r = Row::new("fp-quadrants".into(), &settings, [1.0; 3], 1.0, &c);
         assert_eq!((r.knob(Param::Footprint), r.footprint.as_str()), (1.0, "quadrants"));
+        assert_eq!((r.knob(Param::BounceFootprint), r.bounce_footprint.as_str()), (0.0, "whole"));
+        let bounce = Grid::parse(&["bounce_footprint=whole,quadrants".into()]).unwrap().configs();
+        assert_eq!(bounce[1].overrides(), vec![("gi.bounce_footprint".to_string(), "\"quadrants\"".to_string())]);
+        assert_eq!(bounce[1].label(), "bfp-quadrants");
+        let settings =
+            crate::scene::GiSettings { bounce_footprint: crate::scene::Footprint::Quadrants, ..Default::default() };
+        let r = Row::new("bfp-quadrants".into(), &settings, [1.0; 3], 1.0, &c);
+        assert_eq!((r.knob(Param::BounceFootprint), r.knob(Param::Footprint)), (1.0, 0.0));
         let attenuations = Grid::parse(&["attenuation=n-dot-l,per-side".into()]).unwrap().configs();
         assert_eq!(attenuations[1].overrides(), vec![("gi.attenuation".to_string(), "\"per-side\"".to_string())]);
         assert_eq!(attenuations[1].label(), "att-per-side");
@@ -1222,10 +1241,10 @@ mod tests {
         let drop: Vec<usize> = header
             .iter()
             .enumerate()
-            .filter(|(_, h)| ["attenuation", "footprint"].contains(h))
+            .filter(|(_, h)| ["attenuation", "footprint", "bounce_footprint"].contains(h))
             .map(|(i, _)| i)
             .collect();
-        assert_eq!(drop.len(), 2);
+        assert_eq!(drop.len(), 3);
         let older: String = text
             .lines()
             .map(|l| {
@@ -1240,8 +1259,8 @@ mod tests {
             .collect();
         std::fs::write(&path, older).unwrap();
         let r = &read_rows(&path).unwrap()[0];
-        assert_eq!((r.footprint.as_str(), r.attenuation.as_str()), ("whole", ""));
-        assert!(r.knob(Param::Attenuation).is_nan());
+        assert_eq!((r.footprint.as_str(), r.attenuation.as_str(), r.bounce_footprint.as_str()), ("whole", "", ""));
+        assert!(r.knob(Param::Attenuation).is_nan() && r.knob(Param::BounceFootprint).is_nan());
     }
 
     #[test]

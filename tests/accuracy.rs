@@ -334,10 +334,14 @@ fn presets_render_and_set_can_override_them() {
     fails(&dvsgi(&["--preset", "extreme", "info"]), 2);
     // A preset is a whole point on the fronts: it sets the footprint too, and --set still wins.
     let info = |args: &[&str]| ok(&dvsgi(&[&["info", "scenes/cornell-box.toml"], args].concat()));
+    let has = |text: &str, line: &str| text.lines().any(|l| l.trim() == line);
     let max = info(&["--preset", "max"]);
-    assert!(max.contains("footprint = \"quadrants\"") && max.contains("attenuation = \"per-side\""), "{max}");
+    // Its quadrants are the pixels' cones' only (ACCURACY.md, "Quadrants where they pay").
+    for line in ["footprint = \"quadrants\"", "bounce_footprint = \"whole\"", "attenuation = \"per-side\""] {
+        assert!(has(&max, line), "max: no `{line}` in {max}");
+    }
     let ultra = info(&["--preset", "ultra", "--set", "gi.footprint=\"quadrants\""]);
-    assert!(ultra.contains("footprint = \"quadrants\""), "{ultra}");
-    let low = info(&["--set", "gi.footprint=\"quadrants\"", "--preset", "low"]);
-    assert!(low.contains("footprint = \"quadrants\""), "--set applies after the preset: {low}");
+    assert!(has(&ultra, "footprint = \"quadrants\""), "{ultra}");
+    let low = info(&["--set", "gi.bounce_footprint=\"quadrants\"", "--preset", "low"]);
+    assert!(has(&low, "bounce_footprint = \"quadrants\""), "--set applies after the preset: {low}");
 }

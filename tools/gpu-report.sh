@@ -5,7 +5,7 @@
 #   tools/gpu-report.sh [--bundle DIR] [--only GROUPS] OUT_DIR
 #
 # GROUPS (comma-separated; default all): info, tests, bench, model, layouts, techniques,
-# reflections, serial, raster, sweep, accuracy, cones, curves.
+# reflections, serial, raster, sweep, accuracy, cones, footprints, curves.
 # Runs into an existing OUT_DIR add to it (steps.tsv appends), so a report can be split across
 # several shorter sessions on the GPU machine; README.md is rewritten from all of OUT_DIR.
 #
@@ -41,6 +41,11 @@
 #                          whole image (sweep-*: timed, one frontier per filter) and by region
 #                          (v*-c*-*.json: compare --scene --ref-direct --test-indirect);
 #                          bench-cones-sponza-*: each of the four at 1920x1080, sync, 128^3
+#   bench-footprint-sponza-{static,redraw}-{ultra,max,max-bounce}: the top presets' frame
+#                          (issue 43), Sponza, 1920x1080, sync, static (the pixels' cones) and
+#                          redraw (with the voxel light and bounce): `ultra` (the defaults), `max`
+#                          (the pixels' cones in quadrants) and `max` with gi.bounce_footprint =
+#                          "quadrants" (the bounce's too)
 #   curves/                per-pass cost against voxel resolution, pixels and triangles, with
 #                          fitted exponents (tools/cost-curves.py; curves.md is the table)
 #   steps.tsv, report.log  each step's exit status and seconds; README.md summarises
@@ -72,8 +77,8 @@ if [ $# -ne 1 ]; then
 fi
 for g in ${only//,/ }; do
   case "$g" in
-    info | tests | bench | model | layouts | techniques | reflections | serial | raster | sweep | accuracy | cones | curves) ;;
-    *) echo "gpu-report: unknown group '$g' (info, tests, bench, model, layouts, techniques, reflections, serial, raster, sweep, accuracy, cones, curves)" >&2; exit 2 ;;
+    info | tests | bench | model | layouts | techniques | reflections | serial | raster | sweep | accuracy | cones | footprints | curves) ;;
+    *) echo "gpu-report: unknown group '$g' (info, tests, bench, model, layouts, techniques, reflections, serial, raster, sweep, accuracy, cones, footprints, curves)" >&2; exit 2 ;;
   esac
 done
 # want GROUP: whether this run measures GROUP.
@@ -373,6 +378,20 @@ if want cones; then
       step "bench-$tag" 300 "$bin/bench" --scene scenes/sponza.toml --modes sync "${cone_bench[@]}" \
         --set "gi.voxel_resolution=${cone_res[0]}" --set "gi.diffuse_cones=$n" --set "gi.cone_filter=\"$filter\"" \
         --json "$out/bench-$tag.json" >"$out/bench-$tag.txt" 2>&1
+    done
+  done
+fi
+
+# ----- 5d. The top presets and the footprints (issue 43): what quadrants cost in the pixels' cones
+# and in the bounce's, on a GPU at a real image size (lavapipe's sweeps are at 128^2 and 160x90).
+if want footprints; then
+  for scenario in static redraw; do
+    for preset in ultra max max-bounce; do
+      set=(--preset "${preset%%-*}")
+      [ "$preset" = max-bounce ] && set+=(--set 'gi.bounce_footprint="quadrants"')
+      tag="footprint-sponza-$scenario-$preset"
+      step "bench-$tag" 300 "$bin/bench" --scene scenes/sponza.toml --scenario "$scenario" --modes sync \
+        "${cone_bench[@]}" "${set[@]}" --json "$out/bench-$tag.json" >"$out/bench-$tag.txt" 2>&1
     done
   done
 fi

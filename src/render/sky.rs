@@ -45,7 +45,8 @@ pub fn sky_use(scene: &Scene) -> Option<String> {
             let leak = if gi.opacity == Opacity::Blend {
                 "; with gi.opacity = \"blend\" a closed room under it gets 0.15-0.25 of the light it would with \
                  its roof open (gi.opacity = \"layers\" with gi.voxel_cover = \"directional\": 0.024, and \
-                 gi.footprint = \"quadrants\" too: 0.017; ACCURACY.md, \"Sky light and leaks\")"
+                 gi.footprint and gi.bounce_footprint = \"quadrants\" too: 0.017; ACCURACY.md, \"Sky light and \
+                 leaks\")"
             } else {
                 ""
             };

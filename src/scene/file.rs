@@ -405,6 +405,7 @@ pub(crate) const GI_KEYS: &[&str] = &[
     "cone_filter",
     "opacity",
     "footprint",
+    "bounce_footprint",
     "voxel_cover",
     "step",
     "max_distance",

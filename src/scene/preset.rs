@@ -10,8 +10,9 @@ pub enum Preset {
     Medium,
     High,
     Ultra,
-    /// Above the default: quadrant footprints and per-side voxel light, the most accurate cone
-    /// setting on both fronts, at four to five times `ultra`'s frame on lavapipe.
+    /// Above the default: quadrant footprints for the pixels' cones and per-side voxel light,
+    /// the most accurate cone setting on both fronts, at 1.1 to 1.4 times `ultra`'s frame in
+    /// lavapipe's sweeps (small images: the pixels' cones are most of its cost on large ones).
     Max,
 }
 
@@ -29,8 +30,10 @@ impl Preset {
         // against 0.200 with `medium`, ACCURACY.md). `max` keeps a transmittance per quarter of
         // each cone's footprint and gives a voxel's sides the light of the faces each sees: at
         // 128^3 the top of both fronts (ACCURACY.md, "Quadrant footprints and per-side light on
-        // the fronts"); at 64^3 neither is on them. Every preset sets the footprint, which
-        // costs more than any other knob.
+        // the fronts"); at 64^3 neither is on them. Its quadrants are the pixels' only: in the
+        // bounce they cost three to four times the frame and bought nothing more (ACCURACY.md,
+        // "Quadrants where they pay"). Every preset sets both footprints, which cost more than
+        // any other knob.
         let (voxels, cones, bounces, downsample, attenuation, footprint) = match self {
             Preset::Low => ("32", "4", "1", "2", "\"n-dot-l\"", "\"whole\""),
             Preset::Medium => ("64", "9", "1", "2", "\"normal-weighted\"", "\"whole\""),
@@ -38,9 +41,10 @@ impl Preset {
             Preset::Ultra => ("128", "16", "1", "1", "\"n-dot-l\"", "\"whole\""),
             Preset::Max => ("128", "16", "1", "2", "\"per-side\"", "\"quadrants\""),
         };
-        let values: [(&str, &str); 10] = [
+        let values: [(&str, &str); 11] = [
             ("attenuation", attenuation),
             ("footprint", footprint),
+            ("bounce_footprint", "\"whole\""),
             ("voxel_resolution", voxels),
             ("diffuse_cones", cones),
             ("diffuse_cone_angle", "0"),
@@ -88,7 +92,10 @@ mod tests {
                     "ultra is the scene-file default"
                 );
                 assert_eq!(gi.bounce_interleave, d.bounce_interleave);
-                assert_eq!((gi.attenuation, gi.footprint), (d.attenuation, d.footprint));
+                assert_eq!(
+                    (gi.attenuation, gi.footprint, gi.bounce_footprint),
+                    (d.attenuation, d.footprint, d.bounce_footprint)
+                );
             }
         }
     }

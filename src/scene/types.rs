@@ -745,9 +745,14 @@ pub struct GiSettings {
     pub cone_filter: ConeFilter,
     /// How a cone sample's optical depth follows the walls it crosses (leaks: ACCURACY.md).
     pub opacity: Opacity,
-    /// Whether a cone's samples keep the parts of its footprint apart (partial cover along the
-    /// path: ACCURACY.md).
+    /// Whether the cones of each pixel (diffuse, specular, shadow) keep the parts of their
+    /// footprints apart (partial cover along the path: ACCURACY.md).
     pub footprint: Footprint,
+    /// The same for the cones of the voxel bounce. Separate because the two cost and buy
+    /// differently: in lavapipe's sweeps the bounce's quadrants tripled the frame and were on
+    /// neither front, where the pixels' gave the whole FLIP gain; they keep a closed room's sky
+    /// out (ACCURACY.md, "Quadrants where they pay").
+    pub bounce_footprint: Footprint,
     /// How much of a voxel its surfaces make opaque (thin surfaces and narrow openings).
     pub voxel_cover: VoxelCover,
     /// Step along a cone as a fraction of its diameter (beta).
@@ -807,6 +812,7 @@ impl Default for GiSettings {
             cone_filter: ConeFilter::Trilinear,
             opacity: Opacity::Blend,
             footprint: Footprint::Whole,
+            bounce_footprint: Footprint::Whole,
             voxel_cover: VoxelCover::Touch,
             step: 0.5,
             max_distance: 0.0,

@@ -725,7 +725,7 @@ fn scan_buffer(ctx: &Arc<Context>, specs: &VolumeSpecs) -> GpuResult<Arc<Buffer>
 }
 
 /// The cone-tracing parameters of the per-pixel tracer and of the bounce (`gi.bounce_cones`,
-/// 0: the per-pixel cone set).
+/// 0: the per-pixel cone set; `gi.bounce_footprint`).
 fn gi_uniforms(ctx: &Arc<Context>, scene: &Scene, grid: &VoxelGrid, mip_levels: u32) -> GpuResult<(Buffer, Buffer)> {
     // `--view ao` shows the occlusion whether or not it darkens the final image.
     let mut gi = scene.settings.gi.clone();
@@ -733,7 +733,7 @@ fn gi_uniforms(ctx: &Arc<Context>, scene: &Scene, grid: &VoxelGrid, mip_levels: 
     let (res, vs) = (grid.resolution, grid.voxel_size);
     let gi_params = Buffer::uniform(ctx, "gi params", &GpuGiParams::new(&gi, res, vs, mip_levels))?;
     let bounce_cones = if gi.bounce_cones == 0 { gi.diffuse_cones } else { gi.bounce_cones };
-    let bounce_gi = GiSettings { diffuse_cones: bounce_cones, ..gi };
+    let bounce_gi = GiSettings { diffuse_cones: bounce_cones, footprint: gi.bounce_footprint, ..gi };
     let bounce_params = Buffer::uniform(ctx, "bounce gi params", &GpuGiParams::new(&bounce_gi, res, vs, mip_levels))?;
     Ok((gi_params, bounce_params))
 }
