@@ -919,9 +919,17 @@ fn reference_cache_key(common: &crate::cli::CommonArgs, opts: &SweepOptions, set
         setup.height,
         setup.time,
         opts.spp,
-        common.settings(),
+        reference_sets(&common.sets),
         scene_text
     )
+}
+
+/// The `--set`s that shape the path tracer's image: all but the `[gi]` ones, which (like a
+/// `--preset`, made of `[gi]` keys only) set how dvsgi renders, not the scene. So a sweep
+/// around a preset, or with a `gi` knob fixed by `--set`, reuses the reference cached without.
+fn reference_sets(sets: &[String]) -> Vec<String> {
+    let is_gi = |s: &String| crate::scene::parse_override(s).is_ok_and(|(k, _)| k == "gi" || k.starts_with("gi."));
+    sets.iter().filter(|s| !is_gi(s)).cloned().collect()
 }
 
 /// The reference image: the one cached in `opts.out` when it was made under `key`, else
@@ -1228,6 +1236,18 @@ mod tests {
         assert_eq!(knob_effects(&grid, &old), e);
         let mixed = vec![old[0].clone(), rows[1].clone(), rows[2].clone()];
         assert!(knob_effects(&grid, &mixed).is_empty());
+    }
+
+    #[test]
+    fn the_reference_is_keyed_by_the_settings_that_shape_it() {
+        let sets = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        // A preset sets [gi] keys only, so leaving it out of the key loses nothing.
+        for p in <crate::scene::Preset as clap::ValueEnum>::value_variants() {
+            assert!(p.overrides().iter().all(|(k, _)| k.starts_with("gi.")), "{p:?}");
+        }
+        assert!(reference_sets(&sets(&["gi.footprint=\"quadrants\"", " gi.step = 1"])).is_empty());
+        let kept = sets(&["lights.0.intensity=[2,2,2]", "render.supersample=4", "camera.fov_y=45"]);
+        assert_eq!(reference_sets(&[kept.clone(), sets(&["gi.voxel_resolution=64"])].concat()), kept);
     }
 
     #[test]
