@@ -30,8 +30,9 @@ impl Preset {
         // against 0.200 with `medium`, ACCURACY.md). `max` keeps a transmittance per quarter of
         // each cone's footprint and gives a voxel's sides the light of the faces each sees: at
         // 128^3 the top of both fronts (ACCURACY.md, "Quadrant footprints and per-side light on
-        // the fronts"); at 64^3 neither is on them. Its quadrants are the pixels' only: in the
-        // bounce they cost three to four times the frame and bought nothing more (ACCURACY.md,
+        // the fronts"); at 64^3 neither is on them. Its quadrants are the pixels' only: the
+        // bounce's tripled the frame for no FLIP and are on neither front (they take the Cornell
+        // box's walls a few percent lower and keep a closed room's sky out: ACCURACY.md,
         // "Quadrants where they pay"). Every preset sets both footprints, which cost more than
         // any other knob.
         let (voxels, cones, bounces, downsample, attenuation, footprint) = match self {
