@@ -7,7 +7,8 @@
 // as (L * tau, tau) for trilinear cone samples, or premultiplied (c, alpha) for two-tap ones
 // (TWO_TAP; voxel.glsl); the full-resolution volume holds (L, occupancy 0 or 1), which is
 // premultiplied already; with gi.voxel_cover = "directional" level 0 weighs each voxel by how
-// much of its surface faces the volume's axis (seen_from). With bricked volumes (bricks.glsl)
+// much of its surface faces the volume's axis, and with gi.plane_backs = "dark" a voxel that holds
+// one plane shows the volumes that see it from behind its emission only (seen_from). With bricked volumes (bricks.glsl)
 // a pooled level is written brick by brick over its resident bricks (indirect), and read
 // through its map.
 #include "common.glsl"
@@ -29,6 +30,10 @@ layout(constant_id = 4) const bool LAYERS = false;
 // gi.attenuation = "per-side": level 0 shows each side of a full-resolution voxel its side
 // factor times its radiance (voxel_light.comp, pack_sides in voxel.glsl).
 layout(constant_id = 5) const bool PER_SIDE = false;
+// gi.plane_backs = "dark": level 0 shows a one-plane voxel's back its emission only.
+layout(constant_id = 6) const bool DARK_BACKS = false;
+// Some material emits (the emission volume is bound; else the albedo volume stands in).
+layout(constant_id = 7) const bool HAS_EMISSION = false;
 
 vec4 stored(vec4 premultiplied) {
     return TWO_TAP ? premultiplied : tau_from_alpha(premultiplied, LAYERS ? LAYER_TAU : VOXEL_TAU);
@@ -50,6 +55,8 @@ layout(set = 0, binding = 3, r32ui) uniform readonly uimage3D brick_maps[4];
 layout(set = 0, binding = 5, r32ui) uniform readonly uimage3D vox_normal;
 // The voxel light's side factors (read by level 0 with PER_SIDE).
 layout(set = 0, binding = 6, r32ui) uniform readonly uimage3D vox_sides;
+// The voxels' emission (read by level 0 with DARK_BACKS and HAS_EMISSION).
+layout(set = 0, binding = 7, r32ui) uniform readonly uimage3D vox_emission;
 
 vec4 over(vec4 front, vec4 back) {
     return front + (1.0 - clamp(front.a, 0.0, 1.0)) * back;
@@ -69,6 +76,17 @@ vec4 full_block[8];
 vec3 block_share[8];
 // With PER_SIDE, each full-resolution voxel's side factors.
 uint block_sides[8];
+// With DARK_BACKS, how much of each side (j = 0..5: +x, -x, +y, -y, +z, -z) sees the voxel's
+// front (back_share), and its emitted radiance, premultiplied as the radiance volume is.
+float block_front[8][6];
+vec3 block_emitted[8];
+
+// A voxel of mean normal n seen from side j: 1 where its faces are not one plane; for a plane,
+// 1 from its front and from the edge, 0 from more than 60 degrees behind it, linear between.
+float front_share(vec3 n, int j) {
+    if (length(n) < ONE_PLANE) return 1.0;
+    return clamp(1.0 + 2.0 * dot(normalize(n), side_axis(j)), 0.0, 1.0);
+}
 
 void find_block(ivec3 base) {
     for (int i = 0; i < 8; ++i) {
@@ -79,9 +97,17 @@ void find_block(ivec3 base) {
         if (!FROM_FULL) continue;
         full_block[i] = block_texel[i].x < 0 ? vec4(0.0) : imageLoad(src[0], block_texel[i]);
         if (PER_SIDE && full_block[i].a > 0.0) block_sides[i] = imageLoad(vox_sides, full_texel(c)).r;
-        if (DIRECTIONAL_COVER && full_block[i].a > 0.0) {
-            vec3 n = unpack_rgb_count(imageLoad(vox_normal, full_texel(c)).r).rgb / 255.0 * 2.0 - 1.0;
+        vec3 n = vec3(0.0);
+        if ((DIRECTIONAL_COVER || DARK_BACKS) && full_block[i].a > 0.0)
+            n = unpack_rgb_count(imageLoad(vox_normal, full_texel(c)).r).rgb / 255.0 * 2.0 - 1.0;
+        if (DIRECTIONAL_COVER && full_block[i].a > 0.0)
             block_share[i] = vec3(directional_share(n, 0), directional_share(n, 1), directional_share(n, 2));
+        if (DARK_BACKS) {
+            for (int j = 0; j < 6; ++j) block_front[i][j] = front_share(n, j);
+            // As voxel_light.comp stores it: scaled, clamped, premultiplied by the cover.
+            vec3 e = HAS_EMISSION && full_block[i].a > 0.0
+                       ? unpack_rgb_count(imageLoad(vox_emission, full_texel(c)).r).rgb / 255.0 * grid.params.x : vec3(0.0);
+            block_emitted[i] = min(e * grid.params.y, vec3(HALF_MAX)) * full_block[i].a;
         }
     }
 }
@@ -89,10 +115,15 @@ void find_block(ivec3 base) {
 // Voxel i of the block as the volume of direction `face` sees it: with DIRECTIONAL_COVER, its
 // cover along that axis (directional_share), radiance premultiplied; with PER_SIDE, the light
 // of its side that faces the cones (those travelling +x meet the faces toward -x: side
-// face ^ 1).
+// face ^ 1); with DARK_BACKS, from behind its plane its emission only (two-sided, as the path
+// tracer's), its reflected and bounced light being its front's.
 vec4 seen_from(vec4 v, int i, int face) {
     vec4 seen = DIRECTIONAL_COVER ? v * block_share[i][face / 2] : v;
     if (PER_SIDE) seen.rgb *= side_factor(block_sides[i], face ^ 1);
+    if (DARK_BACKS) {
+        vec3 emitted = min(block_emitted[i] * (seen.a / max(v.a, 1e-6)), seen.rgb);
+        seen.rgb = mix(emitted, seen.rgb, block_front[i][face ^ 1]);
+    }
     return seen;
 }
 

@@ -407,6 +407,7 @@ pub(crate) const GI_KEYS: &[&str] = &[
     "footprint",
     "bounce_footprint",
     "voxel_cover",
+    "plane_backs",
     "step",
     "max_distance",
     "start_offset",

@@ -540,6 +540,21 @@ pub enum VoxelCover {
     Directional,
 }
 
+/// What the cones see of a voxel that holds one plane from behind it (glsl/aniso_mip.comp,
+/// ACCURACY.md "Planes dark from behind").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PlaneBacks {
+    /// Every voxel sends its light to every side: a sunlit floor's voxels light what lies
+    /// under the floor, through the filtered volumes' partial cover.
+    Lit,
+    /// In the directional volumes a voxel whose faces are one plane (mean normal at least
+    /// `ONE_PLANE` long) shows the cones that meet it from behind its emission only: its
+    /// reflected and bounced light leave its front, as a two-sided Lambertian surface's do
+    /// (the light of its back is another surface's). Its opacity is unchanged.
+    Dark,
+}
+
 /// How the voxel volumes are stored (render::voxel::bricks, docs/SPARSE.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -755,6 +770,9 @@ pub struct GiSettings {
     pub bounce_footprint: Footprint,
     /// How much of a voxel its surfaces make opaque (thin surfaces and narrow openings).
     pub voxel_cover: VoxelCover,
+    /// What the cones see of a one-plane voxel from behind: its light (`lit`) or its emission
+    /// only (`dark`).
+    pub plane_backs: PlaneBacks,
     /// Step along a cone as a fraction of its diameter (beta).
     pub step: f32,
     /// Longest cone in world units; 0 = the grid's diagonal.
@@ -814,6 +832,7 @@ impl Default for GiSettings {
             footprint: Footprint::Whole,
             bounce_footprint: Footprint::Whole,
             voxel_cover: VoxelCover::Touch,
+            plane_backs: PlaneBacks::Lit,
             step: 0.5,
             max_distance: 0.0,
             start_offset: 0.0,

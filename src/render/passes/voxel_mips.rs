@@ -61,6 +61,8 @@ impl VoxelMips {
                 (3, u32::from(v.needs.two_tap)),
                 (4, u32::from(v.needs.layers)),
                 (5, u32::from(v.needs.sides)),
+                (6, u32::from(v.needs.dark_backs)),
+                (7, u32::from(v.needs.emission)),
             ];
             let pipeline = Pipeline::compute(ctx, &name, shaders::ANISO_MIP_COMP, &[probe.layout()], 0, &spec)?;
             let set = src.map(|s| mip_set(ctx, v, &name, level(v, s), dst)).transpose()?;
@@ -121,8 +123,9 @@ fn source(volume: &Arc<Image>) -> Binds<'_> {
 }
 
 /// The source (six views), the destination level, the grid, the brick maps and lists, the
-/// normal volume (read by level 0 with `gi.voxel_cover = "directional"`) and the side factors
-/// (read by level 0 with `gi.attenuation = "per-side"`).
+/// normal volume (read by level 0 with `gi.voxel_cover = "directional"` or `gi.plane_backs =
+/// "dark"`), the side factors (read by level 0 with `gi.attenuation = "per-side"`) and the
+/// emission (the albedo in its place where nothing emits; read by level 0 with `dark`).
 fn mip_set<'a>(ctx: &Arc<Context>, v: &'a VoxelVolumes, name: &str, src: Binds<'a>, dst: Level) -> GpuResult<PassSet> {
     // Without bricks the shader never reads the brick lists: the voxel list stands in.
     let lists = v.bricks.as_ref().map_or(&v.list.buffer, |b| &b.lists);
@@ -132,6 +135,7 @@ fn mip_set<'a>(ctx: &Arc<Context>, v: &'a VoxelVolumes, name: &str, src: Binds<'
         .storage(lists, Access::ComputeShaderReadBuffer)
         .storage_image(&v.normal, Access::ComputeShaderReadStorage)
         .storage_image(v.sides_or_placeholder(), Access::ComputeShaderReadStorage)
+        .storage_image(v.emission_or_albedo(), Access::ComputeShaderReadStorage)
         .build(ctx, name, vk::ShaderStageFlags::COMPUTE)
 }
 

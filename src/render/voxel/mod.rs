@@ -12,7 +12,9 @@ pub use grid::{VoxelGrid, RADIANCE_VOLUME_FORMAT};
 use crate::gpu::{Access, Buffer, Context, GpuError, GpuResult, Image, ImageDesc, Sampler};
 use crate::render::binding::Binds;
 use crate::render::cones::GpuGiParams;
-use crate::scene::{ConeFilter, GiSettings, Opacity, Scene, View, VoxelAttenuation, VoxelCover, VoxelLayout};
+use crate::scene::{
+    ConeFilter, GiSettings, Opacity, PlaneBacks, Scene, View, VoxelAttenuation, VoxelCover, VoxelLayout,
+};
 use ash::vk;
 use bricks::{BrickLayout, Bricks, FullImages, MAX_POOLS};
 use bytemuck::{Pod, Zeroable};
@@ -87,6 +89,9 @@ pub struct VoxelNeeds {
     /// full-resolution word, read by the directional volumes' first level), from the normals
     /// seen from each side (twenty-four more words of sums, four of resolved normals).
     pub sides: bool,
+    /// `gi.plane_backs = "dark"` with cones: the directional volumes' first level shows a
+    /// one-plane voxel's back its emission only (reading the normal and emission volumes).
+    pub dark_backs: bool,
 }
 
 impl VoxelNeeds {
@@ -119,6 +124,7 @@ impl VoxelNeeds {
             area_cover: scene.settings.gi.voxel_cover != VoxelCover::Touch,
             bounce_tail: cones && scene.settings.gi.first_update_tail(),
             sides: cones && scene.settings.gi.attenuation == VoxelAttenuation::PerSide,
+            dark_backs: cones && scene.settings.gi.plane_backs == PlaneBacks::Dark,
         }
     }
 }
