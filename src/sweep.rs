@@ -92,6 +92,9 @@ pub enum Param {
     /// `gi.attenuation`, how the voxel light turns with the voxel's faces, by name (index in
     /// [`ATTENUATIONS`]).
     Attenuation,
+    /// `gi.plane_backs`, what cones see of a one-plane voxel from behind, by name (index in
+    /// [`PLANE_BACKS`]).
+    PlaneBacks,
 }
 
 /// The `gi.mode` values a sweep can compare, in the order of their index as a knob value.
@@ -121,6 +124,13 @@ pub const FOOTPRINTS: [&str; 2] = ["whole", "quadrants"];
 
 /// The `gi.attenuation` values, in the order of their index as a knob value.
 pub const ATTENUATIONS: [&str; 3] = ["normal-weighted", "n-dot-l", "per-side"];
+
+/// The `gi.plane_backs` values, in the order of their index as a knob value.
+pub const PLANE_BACKS: [&str; 2] = ["lit", "dark"];
+
+fn lit() -> String {
+    "lit".to_owned()
+}
 
 fn touch() -> String {
     "touch".to_owned()
@@ -164,7 +174,7 @@ fn vct() -> String {
 }
 
 impl Param {
-    pub const ALL: [Param; 25] = [
+    pub const ALL: [Param; 26] = [
         Param::VoxelResolution,
         Param::DiffuseCones,
         Param::DiffuseConeAngle,
@@ -190,6 +200,7 @@ impl Param {
         Param::Footprint,
         Param::BounceFootprint,
         Param::Attenuation,
+        Param::PlaneBacks,
     ];
     /// The key under `[gi]`.
     pub fn key(self) -> &'static str {
@@ -219,6 +230,7 @@ impl Param {
             Param::Footprint => "footprint",
             Param::BounceFootprint => "bounce_footprint",
             Param::Attenuation => "attenuation",
+            Param::PlaneBacks => "plane_backs",
         }
     }
     /// Short prefix in configuration labels.
@@ -249,6 +261,7 @@ impl Param {
             Param::Footprint => "fp-",
             Param::BounceFootprint => "bfp-",
             Param::Attenuation => "att-",
+            Param::PlaneBacks => "backs-",
         }
     }
     /// The names a knob's values are written as, for knobs that take names.
@@ -262,6 +275,7 @@ impl Param {
             Param::VoxelCover => Some(&VOXEL_COVERS),
             Param::Footprint | Param::BounceFootprint => Some(&FOOTPRINTS),
             Param::Attenuation => Some(&ATTENUATIONS),
+            Param::PlaneBacks => Some(&PLANE_BACKS),
             _ => None,
         }
     }
@@ -483,6 +497,9 @@ pub struct Row {
     /// so their value is not known).
     #[serde(default)]
     pub attenuation: String,
+    /// `gi.plane_backs` ("lit" in rows from before it was recorded).
+    #[serde(default = "lit")]
+    pub plane_backs: String,
     /// Median host wall clock of a frame that updates the voxels (relight, mips, bounces)
     /// and traces: the cost when lights or objects move. The front is drawn against this.
     pub frame_ms: f64,
@@ -534,6 +551,7 @@ impl Row {
             footprint: serde_name(s.footprint).unwrap_or_else(whole),
             bounce_footprint: serde_name(s.bounce_footprint).unwrap_or_default(),
             attenuation: serde_name(s.attenuation).unwrap_or_default(),
+            plane_backs: serde_name(s.plane_backs).unwrap_or_else(lit),
             frame_ms: time[0],
             frame_p95_ms: time[1],
             static_frame_ms: time[2],
@@ -628,6 +646,7 @@ impl Row {
             Param::Footprint => name_index(&FOOTPRINTS, &self.footprint),
             Param::BounceFootprint => name_index(&FOOTPRINTS, &self.bounce_footprint),
             Param::Attenuation => name_index(&ATTENUATIONS, &self.attenuation),
+            Param::PlaneBacks => name_index(&PLANE_BACKS, &self.plane_backs),
         }
     }
 }
@@ -1177,6 +1196,13 @@ mod tests {
             crate::scene::GiSettings { bounce_footprint: crate::scene::Footprint::Quadrants, ..Default::default() };
         let r = Row::new("bfp-quadrants".into(), &settings, [1.0; 3], 1.0, &c);
         assert_eq!((r.knob(Param::BounceFootprint), r.knob(Param::Footprint)), (1.0, 0.0));
+        assert_eq!((r.knob(Param::PlaneBacks), r.plane_backs.as_str()), (0.0, "lit"));
+        let backs = Grid::parse(&["plane_backs=lit,dark".into()]).unwrap().configs();
+        assert_eq!(backs[1].overrides(), vec![("gi.plane_backs".to_string(), "\"dark\"".to_string())]);
+        assert_eq!(backs[1].label(), "backs-dark");
+        let settings = crate::scene::GiSettings { plane_backs: crate::scene::PlaneBacks::Dark, ..Default::default() };
+        let r = Row::new("backs-dark".into(), &settings, [1.0; 3], 1.0, &c);
+        assert_eq!((r.knob(Param::PlaneBacks), r.plane_backs.as_str()), (1.0, "dark"));
         let attenuations = Grid::parse(&["attenuation=n-dot-l,per-side".into()]).unwrap().configs();
         assert_eq!(attenuations[1].overrides(), vec![("gi.attenuation".to_string(), "\"per-side\"".to_string())]);
         assert_eq!(attenuations[1].label(), "att-per-side");
@@ -1255,16 +1281,17 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("results.csv");
         write_rows(&path, &[row("a", 10.0, 0.5, 0.9)]).unwrap();
-        // Drop the attenuation and footprint columns, as a results.csv of an older dvsgi has them.
+        // Drop the attenuation, footprint and plane_backs columns, as a results.csv of an older
+        // dvsgi has them.
         let text = std::fs::read_to_string(&path).unwrap();
         let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
         let drop: Vec<usize> = header
             .iter()
             .enumerate()
-            .filter(|(_, h)| ["attenuation", "footprint", "bounce_footprint"].contains(h))
+            .filter(|(_, h)| ["attenuation", "footprint", "bounce_footprint", "plane_backs"].contains(h))
             .map(|(i, _)| i)
             .collect();
-        assert_eq!(drop.len(), 3);
+        assert_eq!(drop.len(), 4);
         let older: String = text
             .lines()
             .map(|l| {
@@ -1281,6 +1308,7 @@ mod tests {
         let r = &read_rows(&path).unwrap()[0];
         assert_eq!((r.footprint.as_str(), r.attenuation.as_str(), r.bounce_footprint.as_str()), ("whole", "", ""));
         assert!(r.knob(Param::Attenuation).is_nan() && r.knob(Param::BounceFootprint).is_nan());
+        assert_eq!((r.plane_backs.as_str(), r.knob(Param::PlaneBacks)), ("lit", 0.0));
     }
 
     #[test]
