@@ -7,10 +7,10 @@
 // as (L * tau, tau) for trilinear cone samples, or premultiplied (c, alpha) for two-tap ones
 // (TWO_TAP; voxel.glsl); the full-resolution volume holds (L, occupancy 0 or 1), which is
 // premultiplied already; with gi.voxel_cover = "directional" level 0 weighs each voxel by how
-// much of its surface faces the volume's axis, and with gi.plane_backs = "dark" a voxel that holds
-// one plane shows the volumes that see it from behind its emission only (seen_from). With bricked volumes (bricks.glsl)
-// a pooled level is written brick by brick over its resident bricks (indirect), and read
-// through its map.
+// much of its surface faces the volume's axis, and with gi.plane_backs = "dark" a voxel that
+// holds one plane shows the volumes that see it from behind its emission only (seen_from). With
+// bricked volumes (bricks.glsl) a pooled level is written brick by brick over its resident
+// bricks (indirect), and read through its map.
 #include "common.glsl"
 #include "voxel.glsl"
 
@@ -77,12 +77,13 @@ vec3 block_share[8];
 // With PER_SIDE, each full-resolution voxel's side factors.
 uint block_sides[8];
 // With DARK_BACKS, how much of each side (j = 0..5: +x, -x, +y, -y, +z, -z) sees the voxel's
-// front (back_share), and its emitted radiance, premultiplied as the radiance volume is.
+// front (front_share), and its emitted radiance, premultiplied as the radiance volume is.
 float block_front[8][6];
 vec3 block_emitted[8];
 
-// A voxel of mean normal n seen from side j: 1 where its faces are not one plane; for a plane,
-// 1 from its front and from the edge, 0 from more than 60 degrees behind it, linear between.
+// How much of a voxel of mean normal n side j (axis s) sees lit: 1 where its faces are not one
+// plane (|n| < ONE_PLANE); for a plane, 1 where s is in front of it or along it (n.s >= 0), 0
+// where s is within 60 degrees of its back's normal -n (n.s <= -1/2), linear between.
 float front_share(vec3 n, int j) {
     if (length(n) < ONE_PLANE) return 1.0;
     return clamp(1.0 + 2.0 * dot(normalize(n), side_axis(j)), 0.0, 1.0);
