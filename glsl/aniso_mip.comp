@@ -76,9 +76,9 @@ vec4 full_block[8];
 vec3 block_share[8];
 // With PER_SIDE, each full-resolution voxel's side factors.
 uint block_sides[8];
-// With DARK_BACKS, how much of each side (j = 0..5: +x, -x, +y, -y, +z, -z) sees the voxel's
-// front (front_share), and its emitted radiance, premultiplied as the radiance volume is.
-float block_front[8][6];
+// With DARK_BACKS, each full-resolution voxel's mean normal (front_share) and its emitted
+// radiance, premultiplied as the radiance volume is.
+vec3 block_normal[8];
 vec3 block_emitted[8];
 
 // How much of a voxel of mean normal n side j (axis s) sees lit: 1 where its faces are not one
@@ -104,7 +104,7 @@ void find_block(ivec3 base) {
         if (DIRECTIONAL_COVER && full_block[i].a > 0.0)
             block_share[i] = vec3(directional_share(n, 0), directional_share(n, 1), directional_share(n, 2));
         if (DARK_BACKS) {
-            for (int j = 0; j < 6; ++j) block_front[i][j] = front_share(n, j);
+            block_normal[i] = n;
             // As voxel_light.comp stores it: scaled, clamped, premultiplied by the cover.
             vec3 e = HAS_EMISSION && full_block[i].a > 0.0
                        ? unpack_rgb_count(imageLoad(vox_emission, full_texel(c)).r).rgb / 255.0 * grid.params.x : vec3(0.0);
@@ -123,7 +123,7 @@ vec4 seen_from(vec4 v, int i, int face) {
     if (PER_SIDE) seen.rgb *= side_factor(block_sides[i], face ^ 1);
     if (DARK_BACKS) {
         vec3 emitted = min(block_emitted[i] * (seen.a / max(v.a, 1e-6)), seen.rgb);
-        seen.rgb = mix(emitted, seen.rgb, block_front[i][face ^ 1]);
+        seen.rgb = mix(emitted, seen.rgb, front_share(block_normal[i], face ^ 1));
     }
     return seen;
 }
