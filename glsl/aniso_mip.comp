@@ -76,17 +76,22 @@ vec4 full_block[8];
 vec3 block_share[8];
 // With PER_SIDE, each full-resolution voxel's side factors.
 uint block_sides[8];
-// With DARK_BACKS, each full-resolution voxel's mean normal (front_share) and its emitted
+// With DARK_BACKS, each full-resolution voxel's plane_normal (front_share) and its emitted
 // radiance, premultiplied as the radiance volume is.
 vec3 block_normal[8];
 vec3 block_emitted[8];
 
-// How much of a voxel of mean normal n side j (axis s) sees lit: 1 where its faces are not one
-// plane (|n| < ONE_PLANE); for a plane, 1 where s is in front of it or along it (n.s >= 0), 0
-// where s is within 60 degrees of its back's normal -n (n.s <= -1/2), linear between.
-float front_share(vec3 n, int j) {
-    if (length(n) < ONE_PLANE) return 1.0;
-    return clamp(1.0 + 2.0 * dot(normalize(n), side_axis(j)), 0.0, 1.0);
+// The plane a voxel of mean normal n holds: its unit normal where its faces are one plane
+// (|n| >= ONE_PLANE), else 0 (found once per voxel; front_share reads it for each side).
+vec3 plane_normal(vec3 n) {
+    return length(n) < ONE_PLANE ? vec3(0.0) : normalize(n);
+}
+
+// How much of a voxel whose plane_normal is u side j (axis s) sees lit: 1 where its faces are
+// not one plane (u = 0); for a plane, 1 where s is in front of it or along it (u.s >= 0), 0
+// where s is within 60 degrees of its back's normal -u (u.s <= -1/2), linear between.
+float front_share(vec3 u, int j) {
+    return clamp(1.0 + 2.0 * dot(u, side_axis(j)), 0.0, 1.0);
 }
 
 void find_block(ivec3 base) {
@@ -104,7 +109,7 @@ void find_block(ivec3 base) {
         if (DIRECTIONAL_COVER && full_block[i].a > 0.0)
             block_share[i] = vec3(directional_share(n, 0), directional_share(n, 1), directional_share(n, 2));
         if (DARK_BACKS) {
-            block_normal[i] = n;
+            block_normal[i] = plane_normal(n);
             // As voxel_light.comp stores it: scaled, clamped, premultiplied by the cover.
             vec3 e = HAS_EMISSION && full_block[i].a > 0.0
                        ? unpack_rgb_count(imageLoad(vox_emission, full_texel(c)).r).rgb / 255.0 * grid.params.x : vec3(0.0);
