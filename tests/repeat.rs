@@ -14,6 +14,11 @@ use common::*;
 /// `dvsgi render SCENE` at 48x48, two frames, with `sets` (KEY=VALUE) and `schedule`, into
 /// `out`, under 4 llvmpipe threads; the EXR's bytes.
 fn render(scene: &str, sets: &[&str], schedule: &str, out: &std::path::Path) -> Vec<u8> {
+    render_with(scene, sets, schedule, out, &[])
+}
+
+/// `render`, with `env` set too.
+fn render_with(scene: &str, sets: &[&str], schedule: &str, out: &std::path::Path, env: &[(&str, &str)]) -> Vec<u8> {
     let mut args: Vec<String> = Vec::new();
     for s in sets {
         args.extend(["--set".to_string(), s.to_string()]);
@@ -37,7 +42,9 @@ fn render(scene: &str, sets: &[&str], schedule: &str, out: &std::path::Path) -> 
         .map(String::from),
     );
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    let o = dvsgi_with(&args, &[("LP_NUM_THREADS", "4")]);
+    let mut env = env.to_vec();
+    env.push(("LP_NUM_THREADS", "4"));
+    let o = dvsgi_with(&args, &env);
     assert!(o.status.success(), "dvsgi {args:?}: {}", stderr(&o));
     assert!(!stderr(&o).contains("validation"), "{}", stderr(&o));
     std::fs::read(out).unwrap()
@@ -82,4 +89,33 @@ fn the_glossy_box_and_sponza_repeat_byte_for_byte() {
     assert_repeats("scenes/cornell-glossy.toml", &["gi.voxel_resolution=128", "gi.bounces=2"]);
     assert_repeats("scenes/sponza.toml", &["gi.voxel_resolution=128"]);
     assert_repeats("scenes/sponza.toml", &["gi.mode=\"rsm+lpv\""]);
+}
+
+/// The cone tracers are built twice (glsl/include/cone.glsl, SAMPLER_LOOP): with the voxel
+/// samplers' loops kept, which CPU drivers run, and unrolled, which GPUs run. On one device the
+/// two give the same bytes: the whole footprint and the quadrants' four parts, the directional
+/// levels of bricked pools (two blended in the loop) and of two-tap samples.
+#[test]
+fn the_gpus_unrolled_cone_tracer_gives_the_kept_one_s_bytes() {
+    let configurations: [&[&str]; 2] = [
+        &["gi.voxel_layout=\"bricks\"", "gi.footprint=\"quadrants\"", "gi.voxel_resolution=64"],
+        &["gi.cone_filter=\"two-tap\"", "gi.voxel_resolution=64"],
+    ];
+    for v in ["kept", "unrolled"] {
+        let o = dvsgi_with(&["info"], &[("DVSGI_CONE_SAMPLERS", v)]);
+        assert!(stdout(&o).contains(&format!("cone tracers: sampler loops {v}")), "{}", stdout(&o));
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for sets in configurations {
+        let [kept, unrolled] = ["kept", "unrolled"].map(|v| {
+            let out = dir.path().join(format!("{v}.exr"));
+            render_with("scenes/cornell-box.toml", sets, "sync", &out, &[("DVSGI_CONE_SAMPLERS", v)])
+        });
+        assert_eq!(kept.len(), unrolled.len(), "{sets:?}: file size");
+        let differing = kept.iter().zip(&unrolled).filter(|(a, b)| a != b).count();
+        assert_eq!(
+            differing, 0,
+            "{sets:?}: {differing} bytes of the unrolled build's image differ from the kept one's"
+        );
+    }
 }

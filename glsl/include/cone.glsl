@@ -22,6 +22,22 @@
 #include "sky.glsl"
 #endif
 
+// Every call site of a function is a copy of it in the compiled shader (GLSL inlines calls).
+// The cone step calls the voxel sampler once per part of its footprint (one, or four
+// quarters) and the directional sampler once per level it blends (one or two), each in a
+// SAMPLER_LOOP. build.rs compiles each shader that traces cones twice:
+// * as it stands, for CPU drivers: the loops are kept, so the sampler is one copy, which
+//   lavapipe compiles on a machine's first frame in a third of the time (BENCHMARKS.md, "What the
+//   cone tracer costs to compile");
+// * with CONE_SAMPLERS_UNROLLED, for GPUs: the loops are unrolled, a copy per part and level.
+//   Kept loops made the H200's cone trace 1.5x slower (BENCHMARKS.md, "What kept loops cost a GPU").
+// Both give the same images (tests/determinism.rs).
+#ifdef CONE_SAMPLERS_UNROLLED
+#define SAMPLER_LOOP [[unroll]]
+#else
+#define SAMPLER_LOOP [[dont_unroll]]
+#endif
+
 // Directional volume `face` (literal) of pooled level l (0..2) at normalized pool
 // coordinates q: trilinear within one brick (every face's pool has the same layout).
 #define POOLED_FACE(face, l, q)                                                                  \
@@ -88,15 +104,16 @@ vec4 anisotropic_level(vec3 uvw, vec3 dir, int l, float d) {
 
 // The directional volumes at fractional `level`, blended by the squared components of `dir`.
 // Returns (L * tau, tau) (voxel.glsl). Dense levels blend between levels in the sampler (one
-// lookup); pooled ones (one image per level) here, the two levels in a loop that calls
-// anisotropic_level once (every call site is a copy of it in the compiled shader: footprint_segment).
+// lookup); pooled ones (one image per level) here, the two levels in a SAMPLER_LOOP that calls
+// anisotropic_level once.
 vec4 sample_anisotropic(vec3 uvw, vec3 dir, float level) {
     int pooled = int(grid.dims.y);
     bool dense = float(pooled) <= level;
     int l = dense ? pooled : int(floor(level));
     float f = dense ? 0.0 : level - float(l);
     vec4 a = vec4(0.0);
-    [[dont_unroll]] for (int k = 0; k < (f > 0.0 ? 2 : 1); ++k) {
+    SAMPLER_LOOP for (int k = 0; k < 2; ++k) {
+        if (k == 1 && !(f > 0.0)) break;
         vec4 v = anisotropic_level(uvw, dir, l + k, dense ? level - float(pooled) : float(l + k - pooled));
         a = k == 0 ? v : mix(a, v, f);
     }
@@ -189,7 +206,8 @@ vec4 two_tap_directional(vec3 uvw, vec3 dir, float level) {
     int l = int(floor(level));
     float f = level - float(l);
     vec4 a = vec4(0.0);
-    [[dont_unroll]] for (int k = 0; k < (f > 0.0 ? 2 : 1); ++k) {
+    SAMPLER_LOOP for (int k = 0; k < 2; ++k) {
+        if (k == 1 && !(f > 0.0)) break;
         vec4 v = two_tap_level(uvw, dir, l + k);
         a = k == 0 ? v : mix(a, v, f);
     }
@@ -237,7 +255,7 @@ vec4 sample_voxels(vec3 g, vec3 dir, float lod) {
     float top = float(gi.counts.z);  // lod of the last directional level + 1
     lod = clamp(lod, 0.0, top);
     bool two_tap = (gi.counts.w & GI_FLAG_TWO_TAP) != 0u;
-    // Each sampler is called at one place (footprint_segment says why).
+    // Each sampler is called at one place (SAMPLER_LOOP says why).
     vec4 full = vec4(0.0);
     if (lod < 1.0) {
         // Occupied full-resolution voxels (radiance L, alpha 1) have optical depth opaque_tau().
@@ -279,9 +297,7 @@ bool quadrants() {
 // texel). Below s = 2 (quarters of texels under a voxel) the quarters share the whole
 // footprint's one sample.
 //
-// One call of sample_voxels, in a loop the compiler keeps (one part, or four): every call site
-// is a copy of the whole sampler in the compiled shader, and a CPU driver (lavapipe) compiles
-// each copy, per pipeline, on a test machine's first frame.
+// One call of sample_voxels, in a SAMPLER_LOOP over the parts (one, or four).
 vec4 footprint_segment(vec3 p, vec3 dir, float tan_half, mat3 across, float s, float step_len, bool quarters,
                        inout vec4 quarter_t) {
     float before = quarters ? dot(quarter_t, vec4(0.25)) : 1.0;
@@ -289,7 +305,8 @@ vec4 footprint_segment(vec3 p, vec3 dir, float tan_half, mat3 across, float s, f
     int parts = quarters && s >= 2.0 ? 4 : 1;
     float q = parts == 4 ? 0.5 * s : s;
     vec3 radiance = vec3(0.0);
-    [[dont_unroll]] for (int k = 0; k < parts; ++k) {
+    SAMPLER_LOOP for (int k = 0; k < 4; ++k) {
+        if (k >= parts) break;
         vec3 pk = p, dk = dir;
         if (parts == 4) {
             vec2 side = vec2((k & 1) == 0 ? -q : q, (k & 2) == 0 ? -q : q);

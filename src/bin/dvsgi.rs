@@ -771,6 +771,14 @@ fn print_device(ctx: &Context) {
         i.limits.max_image_dimension3_d,
         i.limits.max_sampler_anisotropy
     );
+    outln!(
+        "  cone tracers: {} (DVSGI_CONE_SAMPLERS=kept|unrolled chooses)",
+        if dvsgi::gpu::shaders::cone_loops_unrolled(i) {
+            "sampler loops unrolled (the GPU build)"
+        } else {
+            "sampler loops kept (the CPU driver build: one copy of the voxel sampler to compile)"
+        }
+    );
     outln!("  validation: {}", if ctx.validation_enabled { "on" } else { "off" });
 }
 

@@ -18,22 +18,80 @@ pub use sync::Access;
 pub mod shaders {
     include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 
+    /// Which build of a shader that traces cones a device runs (glsl/include/cone.glsl,
+    /// SAMPLER_LOOP): CPU drivers the one whose sampler loops are kept (`kept`: one copy of the
+    /// voxel sampler, which lavapipe compiles in a third of the time), GPUs the unrolled one
+    /// (the H200 traced 1.5x slower with kept loops). `DVSGI_CONE_SAMPLERS=kept|unrolled`
+    /// chooses either on any device (the tests compare them).
+    pub fn cone_variant(
+        info: &super::context::DeviceInfo,
+        kept: &'static [u8],
+        unrolled: &'static [u8],
+    ) -> &'static [u8] {
+        if cone_loops_unrolled(info) {
+            unrolled
+        } else {
+            kept
+        }
+    }
+
+    /// Whether `cone_variant` picks the unrolled build on this device (`dvsgi info` says which).
+    pub fn cone_loops_unrolled(info: &super::context::DeviceInfo) -> bool {
+        match std::env::var("DVSGI_CONE_SAMPLERS").as_deref() {
+            Ok("kept") => false,
+            Ok("unrolled") => true,
+            _ => !info.is_cpu(),
+        }
+    }
+
     #[cfg(test)]
     mod tests {
         const OP_IMAGE_SAMPLE_EXPLICIT_LOD: u32 = 88;
+        const OP_LOOP_MERGE: u32 = 246;
+        const LOOP_CONTROL_UNROLL: u32 = 1;
+        const LOOP_CONTROL_DONT_UNROLL: u32 = 2;
 
-        /// How many `OpImageSampleExplicitLod` (textureLod) instructions a SPIR-V module holds.
-        fn explicit_lod_samples(spirv: &[u8]) -> usize {
+        /// Every instruction of a SPIR-V module: (opcode, its words).
+        fn instructions(spirv: &[u8]) -> Vec<(u32, Vec<u32>)> {
             // What pipeline.rs hands the driver: checks the magic number and the byte order.
             let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv)).expect("build.rs produced valid SPIR-V");
-            let (mut at, mut n) = (5, 0);
+            let (mut at, mut out) = (5, Vec::new());
             while at < words.len() {
                 let (count, opcode) = ((words[at] >> 16) as usize, words[at] & 0xffff);
                 assert!(count > 0, "a zero-length instruction at word {at}");
-                n += usize::from(opcode == OP_IMAGE_SAMPLE_EXPLICIT_LOD);
+                out.push((opcode, words[at..(at + count).min(words.len())].to_vec()));
                 at += count;
             }
-            n
+            out
+        }
+
+        /// How many `OpImageSampleExplicitLod` (textureLod) instructions a SPIR-V module holds.
+        fn explicit_lod_samples(spirv: &[u8]) -> usize {
+            instructions(spirv).iter().filter(|(op, _)| *op == OP_IMAGE_SAMPLE_EXPLICIT_LOD).count()
+        }
+
+        /// How many loops a module asks the driver to unroll and to keep (OpLoopMerge's control).
+        fn loop_controls(spirv: &[u8]) -> (usize, usize) {
+            let merges: Vec<u32> =
+                instructions(spirv).into_iter().filter(|(op, _)| *op == OP_LOOP_MERGE).map(|(_, w)| w[3]).collect();
+            let count = |bit: u32| merges.iter().filter(|&&c| c & bit != 0).count();
+            (count(LOOP_CONTROL_UNROLL), count(LOOP_CONTROL_DONT_UNROLL))
+        }
+
+        /// cone.glsl's SAMPLER_LOOPs (the footprint's parts, the directional levels of the
+        /// plain and two-tap samplers) reach the driver kept in the build for CPU drivers and
+        /// marked for unrolling in the one for GPUs, in every shader that traces cones.
+        #[test]
+        fn cone_tracers_are_built_with_kept_and_with_unrolled_sampler_loops() {
+            for (name, kept, unrolled) in [
+                ("gi_trace", super::GI_TRACE_COMP, super::GI_TRACE_COMP_UNROLLED),
+                ("voxel_bounce", super::VOXEL_BOUNCE_COMP, super::VOXEL_BOUNCE_COMP_UNROLLED),
+            ] {
+                let (k_unroll, k_keep) = loop_controls(kept);
+                let (u_unroll, u_keep) = loop_controls(unrolled);
+                assert!(k_keep >= 3 && k_unroll == 0, "{name}, kept: {k_unroll} unrolled, {k_keep} kept loops");
+                assert!(u_unroll >= 3 && u_keep == 0, "{name}, unrolled: {u_unroll} unrolled, {u_keep} kept loops");
+            }
         }
 
         /// GLSL inlines every call: each call site of the voxel sampler is a copy of it (its

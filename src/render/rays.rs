@@ -206,7 +206,14 @@ impl RtReflectPass {
         )?;
         let cones = u32::from(hit == HitIndirect::Cones);
         let spec = [(0, scene.materials.texture_count()), (1, specular_rays), (2, cones)];
-        let pipeline = Pipeline::compute(ctx, "rt reflections", shaders::RT_REFLECT_COMP, &[set.layout()], 0, &spec)?;
+        let pipeline = Pipeline::compute(
+            ctx,
+            "rt reflections",
+            shaders::cone_variant(&ctx.info, shaders::RT_REFLECT_COMP, shaders::RT_REFLECT_COMP_UNROLLED),
+            &[set.layout()],
+            0,
+            &spec,
+        )?;
         Ok(RtReflectPass { target: target.clone(), pipeline, set, _sampler: sampler })
     }
 

@@ -120,7 +120,7 @@ impl GiTracePass {
         let pipeline = Pipeline::compute(
             ctx,
             "gi trace",
-            shaders::GI_TRACE_COMP,
+            shaders::cone_variant(&ctx.info, shaders::GI_TRACE_COMP, shaders::GI_TRACE_COMP_UNROLLED),
             &[set.layout()],
             0,
             &[

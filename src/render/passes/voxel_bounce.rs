@@ -49,7 +49,8 @@ impl VoxelBouncePass {
             .extend(v.pools())
             .extend(sky.cones_bind())
             .build(ctx, &name, vk::ShaderStageFlags::COMPUTE)?;
-        let pipeline = Pipeline::compute(ctx, "voxel bounce", shaders::VOXEL_BOUNCE_COMP, &[set.layout()], 0, &[])?;
+        let spirv = shaders::cone_variant(&ctx.info, shaders::VOXEL_BOUNCE_COMP, shaders::VOXEL_BOUNCE_COMP_UNROLLED);
+        let pipeline = Pipeline::compute(ctx, "voxel bounce", spirv, &[set.layout()], 0, &[])?;
         Ok(VoxelBouncePass { name, volumes: volumes.clone(), pipeline, set })
     }
 }

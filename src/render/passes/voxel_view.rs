@@ -111,8 +111,9 @@ impl VoxelMipViewPass {
             ViewDirection::PosZ => 5,
             ViewDirection::NegZ => 6,
         };
-        let pipeline =
-            Pipeline::compute(ctx, "voxel mip view", shaders::VOXEL_MIP_VIEW_COMP, &[set.layout()], 4, &[(0, dir)])?;
+        let mip_view =
+            shaders::cone_variant(&ctx.info, shaders::VOXEL_MIP_VIEW_COMP, shaders::VOXEL_MIP_VIEW_COMP_UNROLLED);
+        let pipeline = Pipeline::compute(ctx, "voxel mip view", mip_view, &[set.layout()], 4, &[(0, dir)])?;
         Ok(VoxelMipViewPass { lod, radiance: radiance.clone(), pipeline, set })
     }
 }
