@@ -46,8 +46,9 @@ pub fn sky_use(scene: &Scene) -> Option<String> {
                 "; with gi.opacity = \"blend\" a closed room under it gets 0.15-0.25 of the light it would with \
                  its roof open (gi.opacity = \"layers\" with gi.voxel_cover = \"directional\": 0.024, and \
                  gi.footprint and gi.bounce_footprint = \"quadrants\" too: 0.017; with gi.footprint = \
-                 \"quadrants\" and gi.plane_backs = \"dark\": 0.018 through walls of 1 to 4 voxels; ACCURACY.md, \
-                 \"Sky light and leaks\", \"Planes dark from behind\")"
+                 \"quadrants\" and gi.plane_backs = \"dark\": 0.018 through walls of 1 to 4 voxels, and with both \
+                 footprints in quadrants too 0.008-0.012; ACCURACY.md, \"Sky light and leaks\", \"Planes dark from \
+                 behind\")"
             } else {
                 ""
             };
