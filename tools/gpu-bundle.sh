@@ -2,7 +2,14 @@
 # Packs what tools/gpu-report.sh needs on a GPU machine that has no Rust toolchain and no
 # Vulkan loader or validation layer (only the NVIDIA driver and its ICD):
 #
-#   tools/gpu-bundle.sh [DIR]        (default DIR: .gpu, which git ignores)
+#   tools/gpu-bundle.sh [--no-tests] [--bench-at COMMIT]... [DIR]   (default DIR: .gpu, which git ignores)
+#
+# --no-tests leaves the test executables out (a bundle of a few MiB where the tests' 12 would
+# take the working tree over what the device tool carries); tools/gpu-report.sh then records its
+# tests group as skipped. --bench-at COMMIT (repeatable) adds `bench` built at COMMIT, as
+# bin/bench-COMMIT, to compare the cost of one scene at several commits on one GPU in one call
+# (a git worktree per commit, built in target/bench-at; e.g.
+# docs/bench/nvidia-h200/run-6be6713/ds3.sh).
 #
 # DIR then holds bundle.tar.xz with: the release binaries (dvsgi, bench, soak), every test
 # executable (they find the repository through the path they were built in, recorded in
@@ -16,6 +23,17 @@
 # Needs: cargo, python3, apt-get (Debian/Ubuntu, amd64 packages), xz, ../shared/scenes.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
+with_tests=1
+bench_at=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --no-tests) with_tests=0 ;;
+    --bench-at) bench_at+=("${2:?--bench-at needs a commit}"); shift ;;
+    -*) echo "usage: tools/gpu-bundle.sh [--no-tests] [--bench-at COMMIT]... [DIR]" >&2; exit 2 ;;
+    *) break ;;
+  esac
+  shift
+done
 dir="${1:-$root/.gpu}"
 mkdir -p "$dir"
 dir="$(cd "$dir" && pwd)"
@@ -24,9 +42,10 @@ trap 'rm -rf "$stage"' EXIT
 cd "$root"
 mkdir -p "$stage"/{bin,tests,debs,shared/scenes}
 
-echo "gpu-bundle: building release binaries and test executables"
+echo "gpu-bundle: building release binaries$([ $with_tests = 1 ] && echo " and test executables")"
 cargo build --release --locked --bins
-cargo test --release --locked --no-run --message-format=json 2>/dev/null |
+: >"$stage/tests.tsv"
+[ $with_tests = 1 ] && cargo test --release --locked --no-run --message-format=json 2>/dev/null |
   python3 -c '
 import json, sys
 for line in sys.stdin:
@@ -46,6 +65,15 @@ while IFS=$'\t' read -r name exe; do
   cp "$exe" "$stage/tests/$name"
 done <"$stage/tests.tsv"
 for b in dvsgi bench soak; do cp "target/release/$b" "$stage/bin/"; done
+for c in "${bench_at[@]}"; do
+  short="$(git rev-parse --short "$c")"
+  echo "gpu-bundle: bench at $short"
+  tree="$(mktemp -d)"
+  git worktree add -f --detach "$tree" "$short" >/dev/null
+  (cd "$tree" && CARGO_TARGET_DIR="$root/target/bench-at" cargo build --release --locked --bin bench)
+  cp "$root/target/bench-at/release/bench" "$stage/bin/bench-$short"
+  git worktree remove --force "$tree"
+done
 strip "$stage"/bin/* "$stage"/tests/* 2>/dev/null || true
 echo "$root" >"$stage/manifest-dir"
 git rev-parse HEAD >"$stage/commit" 2>/dev/null || echo unknown >"$stage/commit"

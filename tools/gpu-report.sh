@@ -207,6 +207,8 @@ run_tests() {
 }
 if [ "$quick" = 1 ]; then
   log "tests: skipped (DVSGI_REPORT_QUICK=1)"
+elif want tests && [ -n "$tests_dir" ] && [ -z "$(ls -A "$tests_dir")" ]; then
+  skip tests "the bundle has no test executables (tools/gpu-bundle.sh --no-tests)"
 elif want tests; then
   # `timeout` runs programs, not shell functions: the function goes along in a child bash.
   export tests_dir
