@@ -40,7 +40,17 @@ pub mod shaders {
         match std::env::var("DVSGI_CONE_SAMPLERS").as_deref() {
             Ok("kept") => false,
             Ok("unrolled") => true,
-            _ => !info.is_cpu(),
+            Ok(other) => {
+                static WARNED: std::sync::Once = std::sync::Once::new();
+                WARNED.call_once(|| {
+                    eprintln!(
+                        "warning: DVSGI_CONE_SAMPLERS={other:?} is neither \"kept\" nor \"unrolled\"; the device's \
+                         own build runs"
+                    )
+                });
+                !info.is_cpu()
+            }
+            Err(_) => !info.is_cpu(),
         }
     }
 
