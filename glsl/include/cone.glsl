@@ -29,9 +29,10 @@
 // * as it stands, for CPU drivers: the loops are kept, so the sampler is one copy, which
 //   lavapipe compiles on a machine's first frame in a third of the time (BENCHMARKS.md, "What the
 //   cone tracer costs to compile");
-// * with CONE_SAMPLERS_UNROLLED, for GPUs: the loops are unrolled, a copy per part and level.
-//   Kept loops made the H200's cone trace 1.5x slower (BENCHMARKS.md, "What kept loops cost a GPU").
-// Both give the same images (tests/determinism.rs).
+// * with CONE_SAMPLERS_UNROLLED, for GPUs: the loops are marked for unrolling (SPIR-V's Unroll
+//   loop control, which the driver's compiler follows). Kept loops made the H200's cone trace
+//   1.5x slower; marked, it takes back 0.6 of that (BENCHMARKS.md, "NVIDIA H200 at 6be6713").
+// Both give the same images (tests/repeat.rs).
 #ifdef CONE_SAMPLERS_UNROLLED
 #define SAMPLER_LOOP [[unroll]]
 #else
