@@ -30,7 +30,7 @@
 //   lavapipe compiles on a machine's first frame in a third of the time (BENCHMARKS.md, "What the
 //   cone tracer costs to compile");
 // * with CONE_SAMPLERS_UNROLLED, for GPUs: the loops are marked for unrolling (SPIR-V's Unroll
-//   loop control, which the driver's compiler follows). Kept loops made the H200's cone trace
+//   loop control, a hint to the driver's compiler). Kept loops made the H200's cone trace
 //   1.5x slower; marked, it takes back 0.6 of that (BENCHMARKS.md, "NVIDIA H200 at 6be6713").
 // Both give the same images (tests/repeat.rs).
 #ifdef CONE_SAMPLERS_UNROLLED
