@@ -8,7 +8,8 @@
 // (TWO_TAP; voxel.glsl); the full-resolution volume holds (L, occupancy 0 or 1), which is
 // premultiplied already; with gi.voxel_cover = "directional" level 0 weighs each voxel by how
 // much of its surface faces the volume's axis, and with gi.plane_backs = "dark" a voxel that
-// holds one plane shows the volumes that see it from behind its emission only (seen_from). With
+// holds one plane shows the volumes that see it from behind its emission only, or with
+// "closed" nothing where that back closes a solid (voxel_backs.comp; seen_from). With
 // bricked volumes (bricks.glsl) a pooled level is written brick by brick over its resident
 // bricks (indirect), and read through its map.
 #include "common.glsl"
@@ -34,6 +35,8 @@ layout(constant_id = 5) const bool PER_SIDE = false;
 layout(constant_id = 6) const bool DARK_BACKS = false;
 // Some material emits (the emission volume is bound; else the albedo volume stands in).
 layout(constant_id = 7) const bool HAS_EMISSION = false;
+// gi.plane_backs = "closed" (with DARK_BACKS): level 0 leaves out the backs that close a solid.
+layout(constant_id = 8) const bool CLOSED_BACKS = false;
 
 vec4 stored(vec4 premultiplied) {
     return TWO_TAP ? premultiplied : tau_from_alpha(premultiplied, LAYERS ? LAYER_TAU : VOXEL_TAU);
@@ -57,6 +60,9 @@ layout(set = 0, binding = 5, r32ui) uniform readonly uimage3D vox_normal;
 layout(set = 0, binding = 6, r32ui) uniform readonly uimage3D vox_sides;
 // The voxels' emission (read by level 0 with DARK_BACKS and HAS_EMISSION).
 layout(set = 0, binding = 7, r32ui) uniform readonly uimage3D vox_emission;
+// The backs that close a solid, a bit per directional volume (read by level 0 with
+// CLOSED_BACKS; voxel_backs.comp).
+layout(set = 0, binding = 8, r8ui) uniform readonly uimage3D vox_backs;
 
 vec4 over(vec4 front, vec4 back) {
     return front + (1.0 - clamp(front.a, 0.0, 1.0)) * back;
@@ -77,22 +83,11 @@ vec3 block_share[8];
 // With PER_SIDE, each full-resolution voxel's side factors.
 uint block_sides[8];
 // With DARK_BACKS, each full-resolution voxel's plane_normal (front_share) and its emitted
-// radiance, premultiplied as the radiance volume is.
+// radiance, premultiplied as the radiance volume is; with CLOSED_BACKS, its backs that close a
+// solid (a bit per face).
 vec3 block_normal[8];
 vec3 block_emitted[8];
-
-// The plane a voxel of mean normal n holds: its unit normal where its faces are one plane
-// (|n| >= ONE_PLANE), else 0 (found once per voxel; front_share reads it for each side).
-vec3 plane_normal(vec3 n) {
-    return length(n) < ONE_PLANE ? vec3(0.0) : normalize(n);
-}
-
-// How much of a voxel whose plane_normal is u side j (axis s) sees lit: 1 where its faces are
-// not one plane (u = 0); for a plane, 1 where s is in front of it or along it (u.s >= 0), 0
-// where s is within 60 degrees of its back's normal -u (u.s <= -1/2), linear between.
-float front_share(vec3 u, int j) {
-    return clamp(1.0 + 2.0 * dot(u, side_axis(j)), 0.0, 1.0);
-}
+uint block_closed[8];
 
 void find_block(ivec3 base) {
     for (int i = 0; i < 8; ++i) {
@@ -114,6 +109,7 @@ void find_block(ivec3 base) {
             vec3 e = HAS_EMISSION && full_block[i].a > 0.0
                        ? unpack_rgb_count(imageLoad(vox_emission, full_texel(c)).r).rgb / 255.0 * grid.params.x : vec3(0.0);
             block_emitted[i] = min(e * grid.params.y, vec3(HALF_MAX)) * full_block[i].a;
+            block_closed[i] = CLOSED_BACKS && full_block[i].a > 0.0 ? imageLoad(vox_backs, full_texel(c)).r : 0u;
         }
     }
 }
@@ -122,13 +118,16 @@ void find_block(ivec3 base) {
 // cover along that axis (directional_share), radiance premultiplied; with PER_SIDE, the light
 // of its side that faces the cones (those travelling +x meet the faces toward -x: side
 // face ^ 1); with DARK_BACKS, from behind its plane its emission only (two-sided, as the path
-// tracer's), its reflected and bounced light being its front's.
+// tracer's), its reflected and bounced light being its front's; with CLOSED_BACKS, where that
+// back closes a solid, nothing of the back (what a cone's rays meet there, they met at its front).
 vec4 seen_from(vec4 v, int i, int face) {
     vec4 seen = DIRECTIONAL_COVER ? v * block_share[i][face / 2] : v;
     if (PER_SIDE) seen.rgb *= side_factor(block_sides[i], face ^ 1);
     if (DARK_BACKS) {
+        float front = front_share(block_normal[i], face ^ 1);
+        if (((block_closed[i] >> face) & 1u) != 0u) return seen * front;
         vec3 emitted = min(block_emitted[i] * (seen.a / max(v.a, 1e-6)), seen.rgb);
-        seen.rgb = mix(emitted, seen.rgb, front_share(block_normal[i], face ^ 1));
+        seen.rgb = mix(emitted, seen.rgb, front);
     }
     return seen;
 }

@@ -126,7 +126,7 @@ pub const FOOTPRINTS: [&str; 2] = ["whole", "quadrants"];
 pub const ATTENUATIONS: [&str; 3] = ["normal-weighted", "n-dot-l", "per-side"];
 
 /// The `gi.plane_backs` values, in the order of their index as a knob value.
-pub const PLANE_BACKS: [&str; 2] = ["lit", "dark"];
+pub const PLANE_BACKS: [&str; 3] = ["lit", "dark", "closed"];
 
 fn lit() -> String {
     "lit".to_owned()
@@ -1196,13 +1196,16 @@ mod tests {
             crate::scene::GiSettings { bounce_footprint: crate::scene::Footprint::Quadrants, ..Default::default() };
         let r = Row::new("bfp-quadrants".into(), &settings, [1.0; 3], 1.0, &c);
         assert_eq!((r.knob(Param::BounceFootprint), r.knob(Param::Footprint)), (1.0, 0.0));
-        assert_eq!((r.knob(Param::PlaneBacks), r.plane_backs.as_str()), (0.0, "lit"));
+        assert_eq!((r.knob(Param::PlaneBacks), r.plane_backs.as_str()), (2.0, "closed"));
         let backs = Grid::parse(&["plane_backs=lit,dark".into()]).unwrap().configs();
         assert_eq!(backs[1].overrides(), vec![("gi.plane_backs".to_string(), "\"dark\"".to_string())]);
         assert_eq!(backs[1].label(), "backs-dark");
         let settings = crate::scene::GiSettings { plane_backs: crate::scene::PlaneBacks::Dark, ..Default::default() };
         let r = Row::new("backs-dark".into(), &settings, [1.0; 3], 1.0, &c);
         assert_eq!((r.knob(Param::PlaneBacks), r.plane_backs.as_str()), (1.0, "dark"));
+        let settings = crate::scene::GiSettings { plane_backs: crate::scene::PlaneBacks::Closed, ..Default::default() };
+        let r = Row::new("backs-closed".into(), &settings, [1.0; 3], 1.0, &c);
+        assert_eq!((r.knob(Param::PlaneBacks), r.plane_backs.as_str()), (2.0, "closed"));
         let attenuations = Grid::parse(&["attenuation=n-dot-l,per-side".into()]).unwrap().configs();
         assert_eq!(attenuations[1].overrides(), vec![("gi.attenuation".to_string(), "\"per-side\"".to_string())]);
         assert_eq!(attenuations[1].label(), "att-per-side");

@@ -337,8 +337,18 @@ fn presets_render_and_set_can_override_them() {
     let has = |text: &str, line: &str| text.lines().any(|l| l.trim() == line);
     let max = info(&["--preset", "max"]);
     // Its quadrants are the pixels' cones' only (ACCURACY.md, "Quadrants where they pay").
-    for line in ["footprint = \"quadrants\"", "bounce_footprint = \"whole\"", "attenuation = \"per-side\""] {
+    for line in [
+        "footprint = \"quadrants\"",
+        "bounce_footprint = \"whole\"",
+        "attenuation = \"per-side\"",
+        "plane_backs = \"lit\"",
+    ] {
         assert!(has(&max, line), "max: no `{line}` in {max}");
+    }
+    // The default leaves out the backs that close a solid; `ultra` is the default.
+    for args in [&[][..], &["--preset", "ultra"][..]] {
+        let text = info(args);
+        assert!(has(&text, "plane_backs = \"closed\""), "{args:?}: {text}");
     }
     let ultra = info(&["--preset", "ultra", "--set", "gi.footprint=\"quadrants\""]);
     assert!(has(&ultra, "footprint = \"quadrants\""), "{ultra}");

@@ -191,10 +191,16 @@ fn info_lists_only_the_voxel_passes_and_volumes_the_scene_needs() {
     );
     let out = stdout(&o);
     assert!(o.status.success(), "{}", stderr(&o));
+    // With the default gi.plane_backs = "closed" the static voxels' closed backs are marked
+    // once, after the static voxelization, in a byte volume of their own.
     assert!(
-        out.contains("voxel clear -> voxelize static -> voxel resolve static -> voxel list (static) -> shadow maps"),
+        out.contains(
+            "voxel clear -> voxelize static -> voxel resolve static -> voxel list (static) -> voxel closed backs \
+             (static) -> shadow maps"
+        ),
         "{out}"
     );
+    assert!(out.contains("volume voxel closed backs: "), "{out}");
     // The voxelization's sums: a count, albedo and normal (no emission), 0.12 MiB each.
     assert!(out.contains("volume voxel sum normal z: 0.12 MiB") && !out.contains("voxel sum emission"), "{out}");
     assert!(out.contains("volume voxel albedo: 0.12 MiB") && out.contains("volume voxel normal: 0.12 MiB"), "{out}");

@@ -72,13 +72,14 @@ fn the_cornell_box_repeats_byte_for_byte_with_every_technique() {
 
 /// Bricked volumes (slots handed out in grid order), and the dynamic scene (revoxelized every
 /// update: the dynamic voxels are appended as their fragments arrive, bricks released and
-/// allocated anew).
+/// allocated anew), bricked with closed backs (marked after every revoxelization).
 #[test]
 fn bricks_and_moving_objects_repeat_byte_for_byte() {
     assert_repeats("scenes/cornell-box.toml", &["gi.voxel_layout=\"bricks\"", "gi.voxel_resolution=128"]);
-    for layout in ["dense", "bricks"] {
+    for (layout, backs) in [("dense", "lit"), ("bricks", "closed")] {
         let layout = format!("gi.voxel_layout=\"{layout}\"");
-        assert_repeats("scenes/dynamic-test.toml", &[&layout, "gi.voxel_resolution=128"]);
+        let backs = format!("gi.plane_backs=\"{backs}\"");
+        assert_repeats("scenes/dynamic-test.toml", &[&layout, &backs, "gi.voxel_resolution=128"]);
     }
 }
 

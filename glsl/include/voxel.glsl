@@ -149,6 +149,20 @@ vec3 side_axis(int j) {
     return s;
 }
 
+// gi.plane_backs (aniso_mip.comp, voxel_backs.comp). The plane a voxel of mean normal n holds:
+// its unit normal where its faces are one plane (|n| >= ONE_PLANE), else 0.
+vec3 plane_normal(vec3 n) {
+    return length(n) < ONE_PLANE ? vec3(0.0) : normalize(n);
+}
+
+// How much of a voxel whose plane_normal is u side j (axis s) sees lit: 1 where its faces are
+// not one plane (u = 0); for a plane, 1 where s is in front of it or along it (u.s >= 0), 0
+// where s is within 60 degrees of its back's normal -u (u.s <= -1/2), linear between. The
+// directional volume of cones travelling along +a meets its voxels' sides toward -a.
+float front_share(vec3 u, int j) {
+    return clamp(1.0 + 2.0 * dot(u, side_axis(j)), 0.0, 1.0);
+}
+
 // Side j's normal in 21 bits from bit 21 j of the 128 of a uvec4: its component along the
 // side's axis (in [0, 1], 7 bits as 1..127; 0 where the side has none) and the two across it
 // (in [-1, 1], 7 bits each).

@@ -266,18 +266,20 @@ mod tests {
         scene.settings.gi.voxel_resolution = 8;
         scene.settings.gi.bounces = 1;
         scene.settings.gi.voxel_layout = VoxelLayout::Dense;
+        scene.settings.gi.plane_backs = crate::scene::PlaneBacks::Lit;
         let e = Estimate::of(&scene);
         // albedo + normal 2 x 2048, radiance 4096, bounced radiance and the bounce's scratch
         // volume 2 x 4096, six directional chains of (64 + 8 + 1) texels x 8 bytes, and the
-        // work list's 64-byte header (no triangles: no entries), the six 1^3 placeholders
+        // work list's 64-byte header (no triangles: no entries), the seven 1^3 placeholders
         // (R32_UINT for the brick maps' writers and readers and for the side factors, RGBA16F,
-        // R32G32B32A32_UINT for the side normals, R8_UINT), the voxelization's eight sums (a
+        // R32G32B32A32_UINT for the side normals, R8_UINT for the static flags and for the
+        // closed backs), the voxelization's eight sums (a
         // count, albedo, normal and the surface's offset) 8 x 2048, the scan buffer (a 16-word
         // header and one 8^3 brick) and the first update's bounce tail (its gain and ratio, and
         // two records of the one workgroup an empty list dispatches).
         assert_eq!(
             e.volumes,
-            2 * 2048 + 4096 + 2 * 4096 + 6 * 73 * 8 + 64 + 3 * 4 + 8 + 16 + 1 + 8 * 2048 + 4 * 17 + 64
+            2 * 2048 + 4096 + 2 * 4096 + 6 * 73 * 8 + 64 + 3 * 4 + 8 + 16 + 2 + 8 * 2048 + 4 * 17 + 64
         );
         assert_eq!(e.largest_volume, 4096);
         // gi.attenuation = "per-side": one R32_UINT volume of side factors and one
@@ -286,6 +288,11 @@ mod tests {
         scene.settings.gi.attenuation = crate::scene::VoxelAttenuation::PerSide;
         assert_eq!(Estimate::of(&scene).volumes, e.volumes + 2048 - 4 + 8192 - 16 + 24 * 2048);
         scene.settings.gi.attenuation = crate::scene::VoxelAttenuation::NDotL;
+        // gi.plane_backs = "closed" (the default): an R8_UINT volume of closed backs in place of
+        // its placeholder.
+        scene.settings.gi.plane_backs = crate::scene::PlaneBacks::Closed;
+        assert_eq!(Estimate::of(&scene).volumes, e.volumes + 512 - 1);
+        scene.settings.gi.plane_backs = crate::scene::PlaneBacks::Lit;
         assert_eq!(e.targets, 100 * 40 + 100 * 8, "G-buffer (no emission), radiance, display, diffuse cones");
         scene.settings.gi.mode = GiMode::None;
         assert_eq!(Estimate::of(&scene).volumes, 0);
@@ -314,6 +321,7 @@ mod tests {
         scene.settings.height = 64;
         scene.settings.gi.voxel_resolution = 512;
         scene.settings.gi.voxel_layout = VoxelLayout::Dense;
+        scene.settings.gi.plane_backs = crate::scene::PlaneBacks::Lit;
         let lim = |heap, max_allocation| Limits { device: "llvmpipe", heap, max_allocation };
         let e = Estimate::of(&scene);
         let err = e.check_limits(&scene, &lim(2 << 30, 2 << 30)).unwrap_err().to_string();

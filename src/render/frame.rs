@@ -15,6 +15,7 @@ use super::passes::rt_shadow::RtShadowPass;
 use super::passes::shadow::{ShadowMaps, StaticCasterCache};
 use super::passes::tonemap::{TonemapPass, DISPLAY_FORMAT};
 use super::passes::upload::{UploadPass, Uploads};
+use super::passes::voxel_backs::VoxelBacksPass;
 use super::passes::voxel_bounce::{BounceComposePass, BounceTailPass, TailStep, VoxelBouncePass};
 use super::passes::voxel_bricks::{BrickClearPass, BrickListPass};
 use super::passes::voxel_clear::{DynamicClearPass, VoxelClearPass};
@@ -47,6 +48,8 @@ pub struct VoxelPasses {
     pub resolve_static: VoxelResolvePass,
     /// Closes the work list of occupied voxels after static voxelization.
     pub list_static: VoxelListPass,
+    /// With `gi.plane_backs = "closed"`: the static voxels' backs that close a solid.
+    pub backs_static: Option<VoxelBacksPass>,
     /// Only with dynamic objects.
     pub dynamic: Option<DynamicPasses>,
     pub light: VoxelLightPass,
@@ -77,6 +80,7 @@ impl VoxelPasses {
                 voxelize: VoxelizePass::new(&voxelizer, true),
                 list: VoxelListPass::new(keeper, ListStep::Dynamic),
                 resolve: VoxelResolvePass::after_dynamic(ctx, &volumes)?,
+                backs: VoxelBacksPass::new(ctx, &volumes, true)?,
             })
         } else {
             None
@@ -94,6 +98,7 @@ impl VoxelPasses {
             voxelize_static: VoxelizePass::new(&voxelizer, false),
             resolve_static: VoxelResolvePass::after_static(ctx, &volumes, scan)?,
             list_static: VoxelListPass::new(keeper, ListStep::Static),
+            backs_static: VoxelBacksPass::new(ctx, &volumes, false)?,
             dynamic,
             mips,
             bounces,
@@ -167,7 +172,7 @@ impl Carried {
 }
 
 /// Revoxelizing the dynamic objects: empty their voxels (the list's dynamic range), voxelize
-/// them again, close the list, resolve their sums.
+/// them again, close the list, resolve their sums (and mark their closed backs).
 pub struct DynamicPasses {
     pub clear: DynamicClearPass,
     /// With bricked volumes: bricks the objects reach anew, made resident.
@@ -175,6 +180,8 @@ pub struct DynamicPasses {
     pub voxelize: VoxelizePass,
     pub list: VoxelListPass,
     pub resolve: VoxelResolvePass,
+    /// With `gi.plane_backs = "closed"`.
+    pub backs: Option<VoxelBacksPass>,
 }
 
 /// Making bricks resident before a voxelization: the marking run over the same geometry, then
@@ -967,6 +974,7 @@ impl FramePasses {
             passes.push(&v.voxelize_static);
             passes.push(&v.resolve_static);
             passes.push(&v.list_static);
+            passes.extend(v.backs_static.as_ref().map(|b| b as &dyn Pass));
         }
         if let (true, Some(d)) = (state.revoxelize || !state.static_voxelized, &v.dynamic) {
             passes.push(&d.clear);
@@ -974,6 +982,7 @@ impl FramePasses {
             passes.push(&d.voxelize);
             passes.push(&d.list);
             passes.push(&d.resolve);
+            passes.extend(d.backs.as_ref().map(|b| b as &dyn Pass));
         }
         passes
     }

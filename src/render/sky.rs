@@ -45,10 +45,10 @@ pub fn sky_use(scene: &Scene) -> Option<String> {
             let leak = if gi.opacity == Opacity::Blend {
                 "; with gi.opacity = \"blend\" a closed room under it gets 0.15-0.25 of the light it would with \
                  its roof open (gi.opacity = \"layers\" with gi.voxel_cover = \"directional\": 0.024, and \
-                 gi.footprint and gi.bounce_footprint = \"quadrants\" too: 0.017; with gi.footprint = \
-                 \"quadrants\" and gi.plane_backs = \"dark\": 0.018 through walls of 1 to 4 voxels, and with both \
-                 footprints in quadrants too 0.008-0.012; ACCURACY.md, \"Sky light and leaks\", \"Planes dark from \
-                 behind\")"
+                 gi.footprint and gi.bounce_footprint = \"quadrants\" too: 0.017; with gi.plane_backs = \"closed\" \
+                 as well 0.009-0.012 through walls of 1 to 4 voxels, and a room lit through a window gets 0.81-1.01 \
+                 of the path tracer's indirect light wall by wall; ACCURACY.md, \"Sky light and leaks\", \"Backs \
+                 that close a solid\")"
             } else {
                 ""
             };
@@ -444,7 +444,7 @@ mod tests {
         };
         let blend = sky_use(&load(Vec::new())).unwrap();
         assert!(blend.contains("gi.opacity = \"layers\" with gi.voxel_cover = \"directional\""), "{blend}");
-        assert!(blend.contains("gi.plane_backs = \"dark\""), "{blend}");
+        assert!(blend.contains("gi.plane_backs = \"closed\""), "{blend}");
         let layers = sky_use(&load(vec![("gi.opacity".into(), "\"layers\"".into())])).unwrap();
         assert!(layers.starts_with("sky gradient") && !layers.contains("roof open"), "{layers}");
     }

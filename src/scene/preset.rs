@@ -34,17 +34,23 @@ impl Preset {
         // bounce's tripled the frame for no FLIP and are on neither front (they take the Cornell
         // box's walls a few percent lower and keep a closed room's sky out: ACCURACY.md,
         // "Quadrants where they pay"). Every preset sets both footprints, which cost more than
-        // any other knob.
-        let (voxels, cones, bounces, downsample, attenuation, footprint) = match self {
-            Preset::Low => ("32", "4", "1", "2", "\"n-dot-l\"", "\"whole\""),
-            Preset::Medium => ("64", "9", "1", "2", "\"normal-weighted\"", "\"whole\""),
-            Preset::High => ("64", "16", "1", "2", "\"normal-weighted\"", "\"whole\""),
-            Preset::Ultra => ("128", "16", "1", "1", "\"n-dot-l\"", "\"whole\""),
-            Preset::Max => ("128", "16", "1", "2", "\"per-side\"", "\"quadrants\""),
+        // any other knob. What the cones see of a plane from behind: `ultra`, the default, leaves
+        // out the backs that close a solid (at 128^3 as good as lit backs on the Cornell box's
+        // front and better on Sponza's, and not growing with the grid as lit backs do); the
+        // others keep lit backs, which their sweeps put ahead (32^3 and 64^3 voxels hold too few
+        // closed pockets, and `max`'s quadrants already count a block beside the cone once:
+        // ACCURACY.md, "Backs that close a solid").
+        let (voxels, cones, bounces, downsample, attenuation, footprint, backs) = match self {
+            Preset::Low => ("32", "4", "1", "2", "\"n-dot-l\"", "\"whole\"", "\"lit\""),
+            Preset::Medium => ("64", "9", "1", "2", "\"normal-weighted\"", "\"whole\"", "\"lit\""),
+            Preset::High => ("64", "16", "1", "2", "\"normal-weighted\"", "\"whole\"", "\"lit\""),
+            Preset::Ultra => ("128", "16", "1", "1", "\"n-dot-l\"", "\"whole\"", "\"closed\""),
+            Preset::Max => ("128", "16", "1", "2", "\"per-side\"", "\"quadrants\"", "\"lit\""),
         };
-        let values: [(&str, &str); 11] = [
+        let values: [(&str, &str); 12] = [
             ("attenuation", attenuation),
             ("footprint", footprint),
+            ("plane_backs", backs),
             ("bounce_footprint", "\"whole\""),
             ("voxel_resolution", voxels),
             ("diffuse_cones", cones),
@@ -94,8 +100,8 @@ mod tests {
                 );
                 assert_eq!(gi.bounce_interleave, d.bounce_interleave);
                 assert_eq!(
-                    (gi.attenuation, gi.footprint, gi.bounce_footprint),
-                    (d.attenuation, d.footprint, d.bounce_footprint)
+                    (gi.attenuation, gi.footprint, gi.bounce_footprint, gi.plane_backs),
+                    (d.attenuation, d.footprint, d.bounce_footprint, d.plane_backs)
                 );
             }
         }

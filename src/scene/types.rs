@@ -553,6 +553,12 @@ pub enum PlaneBacks {
     /// reflected and bounced light leave its front, as a two-sided Lambertian surface's do
     /// (the light of its back is another surface's). Its opacity is unchanged.
     Dark,
+    /// "dark", and the backs that close a solid are left out of the directional volumes
+    /// (glsl/voxel_backs.comp): a cone starts outside every solid, so what its rays meet at
+    /// such a back (a block's far side, its top seen from under it) they met at its front; seen
+    /// again, the object blocked a cone's partial footprint twice. The back of an open surface
+    /// (a curtain, a floor seen from under it) stays dark and opaque.
+    Closed,
 }
 
 /// How the voxel volumes are stored (render::voxel::bricks, docs/SPARSE.md).
@@ -770,8 +776,9 @@ pub struct GiSettings {
     pub bounce_footprint: Footprint,
     /// How much of a voxel its surfaces make opaque (thin surfaces and narrow openings).
     pub voxel_cover: VoxelCover,
-    /// What the cones see of a one-plane voxel from behind: its light (`lit`) or its emission
-    /// only (`dark`).
+    /// What the cones see of a one-plane voxel from behind: its light (`lit`), its emission
+    /// only (`dark`), or that and nothing where the back closes a solid (`closed`, the default:
+    /// ACCURACY.md, "Backs that close a solid").
     pub plane_backs: PlaneBacks,
     /// Step along a cone as a fraction of its diameter (beta).
     pub step: f32,
@@ -832,7 +839,7 @@ impl Default for GiSettings {
             footprint: Footprint::Whole,
             bounce_footprint: Footprint::Whole,
             voxel_cover: VoxelCover::Touch,
-            plane_backs: PlaneBacks::Lit,
+            plane_backs: PlaneBacks::Closed,
             step: 0.5,
             max_distance: 0.0,
             start_offset: 0.0,

@@ -12,6 +12,7 @@ pub mod rt_shadow;
 pub mod shadow;
 pub mod tonemap;
 pub mod upload;
+pub mod voxel_backs;
 pub mod voxel_bounce;
 pub mod voxel_bricks;
 pub mod voxel_clear;

@@ -63,6 +63,7 @@ impl VoxelMips {
                 (5, u32::from(v.needs.sides)),
                 (6, u32::from(v.needs.dark_backs)),
                 (7, u32::from(v.needs.emission)),
+                (8, u32::from(v.needs.closed_backs)),
             ];
             let pipeline = Pipeline::compute(ctx, &name, shaders::ANISO_MIP_COMP, &[probe.layout()], 0, &spec)?;
             let set = src.map(|s| mip_set(ctx, v, &name, level(v, s), dst)).transpose()?;
@@ -124,8 +125,9 @@ fn source(volume: &Arc<Image>) -> Binds<'_> {
 
 /// The source (six views), the destination level, the grid, the brick maps and lists, the
 /// normal volume (read by level 0 with `gi.voxel_cover = "directional"` or `gi.plane_backs =
-/// "dark"`), the side factors (read by level 0 with `gi.attenuation = "per-side"`) and the
-/// emission (the albedo in its place where nothing emits; read by level 0 with `dark`).
+/// "dark"`), the side factors (read by level 0 with `gi.attenuation = "per-side"`), the
+/// emission (the albedo in its place where nothing emits; read by level 0 with `dark`) and the
+/// closed backs (read by level 0 with `gi.plane_backs = "closed"`).
 fn mip_set<'a>(ctx: &Arc<Context>, v: &'a VoxelVolumes, name: &str, src: Binds<'a>, dst: Level) -> GpuResult<PassSet> {
     // Without bricks the shader never reads the brick lists: the voxel list stands in.
     let lists = v.bricks.as_ref().map_or(&v.list.buffer, |b| &b.lists);
@@ -136,6 +138,7 @@ fn mip_set<'a>(ctx: &Arc<Context>, v: &'a VoxelVolumes, name: &str, src: Binds<'
         .storage_image(&v.normal, Access::ComputeShaderReadStorage)
         .storage_image(v.sides_or_placeholder(), Access::ComputeShaderReadStorage)
         .storage_image(v.emission_or_albedo(), Access::ComputeShaderReadStorage)
+        .storage_image(v.backs_or_placeholder(), Access::ComputeShaderReadStorage)
         .build(ctx, name, vk::ShaderStageFlags::COMPUTE)
 }
 

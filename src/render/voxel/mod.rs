@@ -89,19 +89,25 @@ pub struct VoxelNeeds {
     /// full-resolution word, read by the directional volumes' first level), from the normals
     /// seen from each side (twenty-four more words of sums, four of resolved normals).
     pub sides: bool,
-    /// `gi.plane_backs = "dark"` with cones: the directional volumes' first level shows a
-    /// one-plane voxel's back its emission only (reading the normal and emission volumes).
+    /// `gi.plane_backs = "dark"` or `"closed"` with cones: the directional volumes' first level
+    /// shows a one-plane voxel's back its emission only (reading the normal and emission
+    /// volumes).
     pub dark_backs: bool,
+    /// `gi.plane_backs = "closed"` with cones: each voxelization marks the backs that close a
+    /// solid (one more full-resolution byte, glsl/voxel_backs.comp), which the first level
+    /// leaves out.
+    pub closed_backs: bool,
 }
 
 impl VoxelNeeds {
     /// Pool 0's images besides the sampled radiance (what its slot arrangement weighs):
-    /// albedo, normal, emission and the sums (R32_UINT), the static flags (R8_UINT), the
-    /// bounce's scratch volume.
+    /// albedo, normal, emission and the sums (R32_UINT), the static flags and the closed backs
+    /// (R8_UINT), the bounce's scratch volume.
     pub fn full_images(&self) -> FullImages {
         let sides = if self.sides { 1 + 4 } else { 0 };
         let words = 2 + u32::from(self.emission) + sides + sum_word_indices(self).len() as u32;
-        FullImages { words, bytes: u32::from(self.dynamic), scratch: self.bounces > 0 }
+        let bytes = u32::from(self.dynamic) + u32::from(self.closed_backs);
+        FullImages { words, bytes, scratch: self.bounces > 0 }
     }
 
     /// In the bricked `layout`: the directional levels of a grid of `resolution` kept in pools
@@ -124,7 +130,8 @@ impl VoxelNeeds {
             area_cover: scene.settings.gi.voxel_cover != VoxelCover::Touch,
             bounce_tail: cones && scene.settings.gi.first_update_tail(),
             sides: cones && scene.settings.gi.attenuation == VoxelAttenuation::PerSide,
-            dark_backs: cones && scene.settings.gi.plane_backs == PlaneBacks::Dark,
+            dark_backs: cones && scene.settings.gi.plane_backs != PlaneBacks::Lit,
+            closed_backs: cones && scene.settings.gi.plane_backs == PlaneBacks::Closed,
         }
     }
 }
@@ -179,6 +186,12 @@ pub struct VoxelVolumes {
     pub side_normals: Option<Arc<Image>>,
     /// Bound in place of `side_normals` when there are none.
     pub side_normals_placeholder: Option<Arc<Image>>,
+    /// With `needs.closed_backs`: each one-plane voxel's backs that close a solid, a bit per
+    /// directional volume (R8_UINT: glsl/voxel_backs.comp), written after each voxelization,
+    /// read by the directional volumes' first level.
+    pub backs: Option<Arc<Image>>,
+    /// Bound in place of `backs` when there are none (a 1-voxel volume, never touched).
+    pub backs_placeholder: Option<Arc<Image>>,
     /// Emitted radiance that maps to 255 in the emission volume.
     pub emission_scale: f32,
     /// The radiance, bounce and directional volumes hold radiance times this
@@ -441,6 +454,8 @@ impl VoxelVolumes {
             sides_placeholder: optional("voxel side factors placeholder", &specs.sides_placeholder)?,
             side_normals: optional("voxel side normals", &specs.side_normals)?,
             side_normals_placeholder: optional("voxel side normals placeholder", &specs.side_normals_placeholder)?,
+            backs: optional("voxel closed backs", &specs.backs)?,
+            backs_placeholder: optional("voxel closed backs placeholder", &specs.backs_placeholder)?,
             emission_scale,
             radiance_scale,
             diffuse_rays: scene.settings.gi.diffuse_rays,
@@ -491,6 +506,7 @@ impl VoxelVolumes {
         v.extend([&self.map_placeholder, &self.read_placeholder, &self.pool_placeholder]);
         v.extend(self.sides_placeholder.as_ref());
         v.extend(self.side_normals_placeholder.as_ref());
+        v.extend(self.backs_placeholder.as_ref());
         v
     }
 
@@ -501,6 +517,7 @@ impl VoxelVolumes {
         v.extend(self.flags.as_ref());
         v.extend(self.sides.as_ref());
         v.extend(self.side_normals.as_ref());
+        v.extend(self.backs.as_ref());
         v.push(&self.radiance);
         v.extend(self.bounced.iter());
         v.extend(self.sums.iter().map(|(_, image)| image));
@@ -533,6 +550,11 @@ impl VoxelVolumes {
     /// The side factors, or their placeholder where `gi.attenuation` is not `"per-side"`.
     pub fn sides_or_placeholder(&self) -> &Arc<Image> {
         self.sides.as_ref().or(self.sides_placeholder.as_ref()).expect("sides or placeholder")
+    }
+
+    /// The closed backs, or their placeholder where `gi.plane_backs` is not `"closed"`.
+    pub fn backs_or_placeholder(&self) -> &Arc<Image> {
+        self.backs.as_ref().or(self.backs_placeholder.as_ref()).expect("backs or placeholder")
     }
 
     /// The normals seen from each side, or their placeholder.

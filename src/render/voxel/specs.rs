@@ -66,6 +66,10 @@ pub struct VolumeSpecs {
     pub sides_placeholder: Option<Alloc>,
     pub side_normals: Option<Alloc>,
     pub side_normals_placeholder: Option<Alloc>,
+    /// With `gi.plane_backs = "closed"`: the backs that close a solid (R8_UINT); else a 1^3
+    /// placeholder.
+    pub backs: Option<Alloc>,
+    pub backs_placeholder: Option<Alloc>,
     /// The voxelization's sums (R32_UINT).
     pub sums: Vec<Alloc>,
     /// The direct radiance (RGBA16F, sampled; pool 0 at 9^3 per slot, with the apron).
@@ -131,6 +135,8 @@ impl VolumeSpecs {
             sides_placeholder: (!needs.sides).then(|| placeholder(F::R32_UINT, false)),
             side_normals: needs.sides.then(|| volume(F::R32G32B32A32_UINT)),
             side_normals_placeholder: (!needs.sides).then(|| placeholder(F::R32G32B32A32_UINT, false)),
+            backs: needs.closed_backs.then(|| volume(F::R8_UINT)),
+            backs_placeholder: (!needs.closed_backs).then(|| placeholder(F::R8_UINT, false)),
             sums: sum_word_indices(needs).iter().map(|_| volume(F::R32_UINT)).collect(),
             radiance,
             bounced: if needs.bounces > 0 { vec![radiance, volume(RADIANCE_VOLUME_FORMAT)] } else { Vec::new() },
@@ -164,6 +170,8 @@ impl VolumeSpecs {
         out.extend(self.sides_placeholder);
         out.extend(self.side_normals);
         out.extend(self.side_normals_placeholder);
+        out.extend(self.backs);
+        out.extend(self.backs_placeholder);
         out.extend(&self.sums);
         out.push(self.radiance);
         out.extend(&self.bounced);
