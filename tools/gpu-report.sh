@@ -5,7 +5,7 @@
 #   tools/gpu-report.sh [--bundle DIR] [--only GROUPS] OUT_DIR
 #
 # GROUPS (comma-separated; default all): info, tests, bench, model, layouts, techniques,
-# reflections, serial, raster, sweep, accuracy, cones, footprints, curves.
+# reflections, serial, raster, sweep, accuracy, cones, footprints, backs, curves.
 # Runs into an existing OUT_DIR add to it (steps.tsv appends), so a report can be split across
 # several shorter sessions on the GPU machine; README.md is rewritten from all of OUT_DIR.
 #
@@ -46,6 +46,10 @@
 #                          redraw (with the voxel light and bounce): `ultra` (the defaults), `max`
 #                          (the pixels' cones in quadrants) and `max` with gi.bounce_footprint =
 #                          "quadrants" (the bounce's too)
+#   backs-sponza/          gi.plane_backs = "closed" (issue 43, fifteenth part): Dabrovic's Sponza at
+#                          128^3, 256^3 and 512^3 against a 4096-spp reference at 480x270, by region
+#                          (v*-closed.json); bench-backs-sponza-v*-{lit,closed}: 1920x1080, sync,
+#                          from the first frame (--warmup 0: the pass that marks the static voxels)
 #   curves/                per-pass cost against voxel resolution, pixels and triangles, with
 #                          fitted exponents (tools/cost-curves.py; curves.md is the table)
 #   steps.tsv, report.log  each step's exit status and seconds; README.md summarises
@@ -77,8 +81,8 @@ if [ $# -ne 1 ]; then
 fi
 for g in ${only//,/ }; do
   case "$g" in
-    info | tests | bench | model | layouts | techniques | reflections | serial | raster | sweep | accuracy | cones | footprints | curves) ;;
-    *) echo "gpu-report: unknown group '$g' (info, tests, bench, model, layouts, techniques, reflections, serial, raster, sweep, accuracy, cones, footprints, curves)" >&2; exit 2 ;;
+    info | tests | bench | model | layouts | techniques | reflections | serial | raster | sweep | accuracy | cones | footprints | backs | curves) ;;
+    *) echo "gpu-report: unknown group '$g' (info, tests, bench, model, layouts, techniques, reflections, serial, raster, sweep, accuracy, cones, footprints, backs, curves)" >&2; exit 2 ;;
   esac
 done
 # want GROUP: whether this run measures GROUP.
@@ -396,6 +400,40 @@ if want footprints; then
         "${cone_bench[@]}" "${set[@]}" --json "$out/bench-$tag.json" >"$out/bench-$tag.txt" 2>&1
     done
   done
+fi
+
+# ----- 5e. The backs that close a solid (issue 43, fifteenth part): gi.plane_backs = "closed", the
+# default, by region on Dabrovic's Sponza at every grid (lit and dark ran on the H200 at 6be6713;
+# their images have not changed since), and what it costs: the mips against lit backs, and the
+# pass that marks the static voxels' backs in the first frame (--warmup 0).
+if [ "$quick" = 1 ]; then
+  backs_size=(--width 32 --height 18) backs_spp=16 backs_res=(16 32) backs_bench=(--width 64 --height 36 --frames 2)
+else
+  backs_size=(--width 480 --height 270) backs_spp=4096 backs_res=(128 256 512) backs_bench=(--width 1920 --height 1080 --frames 30)
+fi
+if want backs; then
+  b="$out/backs-sponza"
+  mkdir -p "$b"
+  step backs-reference 300 "$bin/dvsgi" reference scenes/sponza.toml "${backs_size[@]}" --spp "$backs_spp" \
+    --out "$b/reference.exr" >"$b/reference.txt" 2>&1
+  step backs-reference-direct 120 "$bin/dvsgi" reference scenes/sponza.toml "${backs_size[@]}" --spp 1024 \
+    --bounces 0 --out "$b/direct.exr" >>"$b/reference.txt" 2>&1
+  for v in "${backs_res[@]}"; do
+    tag="v$v-closed" set=(--set "gi.voxel_resolution=$v" --set 'gi.plane_backs="closed"')
+    step "backs-$tag" 300 bash -c '"$@" --out "$0.exr" && "$@" --view indirect --out "$0-indirect.exr"' \
+      "$b/$tag" "$bin/dvsgi" render scenes/sponza.toml "${backs_size[@]}" --schedule sync --frames 8 "${set[@]}" \
+      >"$b/$tag.txt" 2>&1
+    step "backs-compare-$tag" 120 "$bin/dvsgi" compare "$b/$tag.exr" "$b/reference.exr" --scene scenes/sponza.toml \
+      "${set[@]}" --ref-direct "$b/direct.exr" --test-indirect "$b/$tag-indirect.exr" --json "$b/$tag.json" >>"$b/$tag.txt" 2>&1
+    rm -f "$b/$tag.exr" "$b/$tag-indirect.exr"
+    for backs in lit closed; do
+      tag="backs-sponza-v$v-$backs"
+      step "bench-$tag" 300 "$bin/bench" --scene scenes/sponza.toml --modes sync "${backs_bench[@]}" --warmup 0 \
+        --set "gi.voxel_resolution=$v" --set "gi.plane_backs=\"$backs\"" --json "$out/bench-$tag.json" \
+        >"$out/bench-$tag.txt" 2>&1
+    done
+  done
+  rm -f "$b/reference.var.exr" "$b/direct.var.exr"
 fi
 
 # ----- 6. Cost curves: per-pass cost against voxel resolution, pixels and triangles. -----
