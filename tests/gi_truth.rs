@@ -921,42 +921,67 @@ fn the_first_update_adds_the_bounces_it_does_not_run() {
 /// bounces and their tail hold the converged light (the test above), so what is measured is the
 /// voxels, not the bounce count (ACCURACY.md, "A room with an open corner").
 ///
-/// Every surface is within 0.85..1.15 at 128^3 (the bound), and no surface's error
-/// grows by more than 0.05 from one resolution to the next. Measured (lavapipe): every surface
-/// 1.02-1.17 at 32^3, 0.98-1.11 at 64^3, 0.95-1.08 at 128^3. The lit wall converges (1.171,
-/// 1.108, 1.075); the others drift by about -3% per doubling, which is the light bounced more
-/// than once (the light bounced once holds its level: 1.047, 1.040, 1.031 of the reference's
-/// over the image). So the errors of the north and east walls grow from 0.005 and 0.021 at
-/// 64^3 to 0.041 and 0.052 at 128^3: the "does not grow" is not met there, and the
-/// 0.05 bound only catches growth like Sponza's (ACCURACY.md).
+/// At the defaults every surface is within 0.85..1.15 at 128^3 (the bound), and no
+/// surface's error grows by more than 0.05 from one resolution to the next. Measured
+/// (lavapipe): 1.02-1.17 at 32^3, 0.97-1.10 at 64^3, 0.94-1.06 at 128^3. The lit wall
+/// converges; the others drift by about -3% per doubling, so the north and east walls' errors
+/// grow from 0.016 and 0.027 at 64^3 to 0.052 and 0.058 at 128^3: the "does not grow"
+/// is not met at the defaults.
+///
+/// With `gi.opacity = "layers"` (a wall's whole optical depth at any angle, where the default
+/// `"blend"` keeps cos(theta) of it) the surfaces drift down too, a little less, but from above
+/// the bound, so every surface's error shrinks with every doubling (measured: 1.11-1.29,
+/// 1.08-1.24, 1.05-1.22): what the default's leak hides is the cones' over-count of the cover
+/// that stays in part of a footprint. The closed emissive box puts part of the drift in the voxel
+/// bounce, which loses more light the finer the grid with either opacity (ACCURACY.md, sixteenth
+/// part). Both behaviours are asserted, so that a change to either error shows here.
 #[test]
 fn indirect_light_converges_as_voxels_shrink() {
     let ctx = context();
     let scene = open_corner_room();
     let truth = path_traced_indirect(&ctx, &scene, 1024);
     let map = RegionMap::trace(&scene, 48, 48);
-    let mut errors: Vec<Vec<(String, f64)>> = Vec::new();
-    for res in [32u32, 64, 128] {
-        let mut s = scene.clone();
-        s.settings.gi.voxel_resolution = res;
-        s.settings.view = dvsgi::scene::View::Indirect;
-        let (out, _) = render(&ctx, s);
-        let ind = region_stats(&map, &Pair { test: &linear(&out), reference: &truth, reference_variance: None });
-        let meshes: Vec<(String, f64)> = ind
-            .iter()
-            .filter(|s| s.grouping == Grouping::Mesh && !s.small)
-            .map(|s| (s.name.clone(), s.ratio))
-            .collect();
-        let report: Vec<String> = meshes.iter().map(|(n, r)| format!("{n} {r:.3}")).collect();
-        eprintln!("{res}^3: indirect light / the reference's: {}", report.join("; "));
-        errors.push(meshes);
-    }
-    assert!(errors[0].len() >= 6, "surfaces in view: {:?}", errors[0]);
-    for (name, _) in &errors[0] {
-        let err = |i: usize| (errors[i].iter().find(|(n, _)| n == name).unwrap().1 - 1.0).abs();
+    let errors_by_grid = |opacity: dvsgi::scene::Opacity| -> Vec<Vec<(String, f64)>> {
+        [32u32, 64, 128]
+            .into_iter()
+            .map(|res| {
+                let mut s = scene.clone();
+                s.settings.gi.voxel_resolution = res;
+                s.settings.gi.opacity = opacity;
+                s.settings.view = dvsgi::scene::View::Indirect;
+                let (out, _) = render(&ctx, s);
+                let ind =
+                    region_stats(&map, &Pair { test: &linear(&out), reference: &truth, reference_variance: None });
+                let meshes: Vec<(String, f64)> = ind
+                    .iter()
+                    .filter(|s| s.grouping == Grouping::Mesh && !s.small)
+                    .map(|s| (s.name.clone(), s.ratio))
+                    .collect();
+                let report: Vec<String> = meshes.iter().map(|(n, r)| format!("{n} {r:.3}")).collect();
+                eprintln!("{opacity:?}, {res}^3: indirect light / the reference's: {}", report.join("; "));
+                meshes
+            })
+            .collect()
+    };
+    let (blend, layers) = (errors_by_grid(dvsgi::scene::Opacity::Blend), errors_by_grid(dvsgi::scene::Opacity::Layers));
+    assert_eq!(scene.settings.gi.opacity, dvsgi::scene::Opacity::Blend, "the defaults' opacity");
+    assert!(blend[0].len() >= 6, "surfaces in view: {:?}", blend[0]);
+    let error = |errors: &[Vec<(String, f64)>], i: usize, name: &str| {
+        (errors[i].iter().find(|(n, _)| n == name).unwrap().1 - 1.0).abs()
+    };
+    for (name, _) in &blend[0] {
+        let err = |i: usize| error(&blend, i, name);
         assert!(err(1) <= err(0) + 0.05, "{name}: error grows from 32^3 ({:.3}) to 64^3 ({:.3})", err(0), err(1));
         assert!(err(2) <= err(1) + 0.05, "{name}: error grows from 64^3 ({:.3}) to 128^3 ({:.3})", err(1), err(2));
         assert!(err(2) <= 0.15, "{name}: at 128^3 the indirect light is off by {:.3}", err(2));
+        let err = |i: usize| error(&layers, i, name);
+        assert!(
+            err(1) < err(0) && err(2) < err(1),
+            "{name}: with layers opacity the error does not shrink: {:.3}, {:.3}, {:.3}",
+            err(0),
+            err(1),
+            err(2)
+        );
     }
 }
 
