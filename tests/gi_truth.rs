@@ -932,8 +932,7 @@ fn the_first_update_adds_the_bounces_it_does_not_run() {
 /// `"blend"` keeps cos(theta) of it) the surfaces drift down too, a little less, but from above
 /// the bound, so every surface's error shrinks with every doubling (measured: 1.11-1.29,
 /// 1.08-1.24, 1.05-1.22): what the default's leak hides is the cones' over-count of the cover
-/// that stays in part of a footprint. The closed emissive box puts part of the drift in the voxel
-/// bounce, which loses more light the finer the grid with either opacity (ACCURACY.md, sixteenth
+/// that stays in part of a footprint. The drift's cause is not found (ACCURACY.md, sixteenth
 /// part). Both behaviours are asserted, so that a change to either error shows here.
 #[test]
 fn indirect_light_converges_as_voxels_shrink() {
