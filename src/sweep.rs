@@ -120,7 +120,7 @@ pub const OPACITIES: [&str; 2] = ["blend", "layers"];
 pub const VOXEL_COVERS: [&str; 3] = ["touch", "area", "directional"];
 
 /// The `gi.footprint` values, in the order of their index as a knob value.
-pub const FOOTPRINTS: [&str; 2] = ["whole", "quadrants"];
+pub const FOOTPRINTS: [&str; 3] = ["whole", "quadrants", "shares"];
 
 /// The `gi.attenuation` values, in the order of their index as a knob value.
 pub const ATTENUATIONS: [&str; 3] = ["normal-weighted", "n-dot-l", "per-side"];
@@ -1189,6 +1189,9 @@ mod tests {
         let r = Row::new("fp-quadrants".into(), &settings, [1.0; 3], 1.0, &c);
         assert_eq!((r.knob(Param::Footprint), r.footprint.as_str()), (1.0, "quadrants"));
         assert_eq!((r.knob(Param::BounceFootprint), r.bounce_footprint.as_str()), (0.0, "whole"));
+        let settings = crate::scene::GiSettings { footprint: crate::scene::Footprint::Shares, ..Default::default() };
+        let r = Row::new("fp-shares".into(), &settings, [1.0; 3], 1.0, &c);
+        assert_eq!((r.knob(Param::Footprint), r.footprint.as_str()), (2.0, "shares"));
         let bounce = Grid::parse(&["bounce_footprint=whole,quadrants".into()]).unwrap().configs();
         assert_eq!(bounce[1].overrides(), vec![("gi.bounce_footprint".to_string(), "\"quadrants\"".to_string())]);
         assert_eq!(bounce[1].label(), "bfp-quadrants");

@@ -23,9 +23,9 @@
 #endif
 
 // Every call site of a function is a copy of it in the compiled shader (GLSL inlines calls).
-// The cone step calls the voxel sampler once per part of its footprint (one, or four
-// quarters) and the directional sampler once per level it blends (one or two), each in a
-// SAMPLER_LOOP. build.rs compiles each shader that traces cones twice:
+// The cone step calls the voxel sampler once per part of its footprint (one; four quarters;
+// or four quarters' shares and the whole) and the directional sampler once per level it
+// blends (one or two), each in a SAMPLER_LOOP. build.rs compiles each shader that traces cones twice:
 // * as it stands, for CPU drivers: the loops are kept, so the sampler is one copy, which
 //   lavapipe compiles on a machine's first frame in a third of the time (BENCHMARKS.md, "What the
 //   cone tracer costs to compile");
@@ -277,8 +277,29 @@ vec4 cone_segment(vec4 smp, float depth) {
     return vec4(max(smp.rgb, vec3(0.0)) / tau * a, a);
 }
 
-bool quadrants() {
-    return (gi.counts.w & GI_FLAG_QUADRANTS) != 0u;
+// What a cone has met so far beyond its current step (trace_cone), by gi.footprint:
+// * "whole": nothing (the caller composites each step).
+// * "quadrants": `parts` is each quarter's transmittance.
+// * "shares": `parts` is the largest share of each quarter of the footprint that the cone has
+//   met covered, and `path` the transmittance the rest has composited along the path.
+struct Footprint {
+    vec4 parts;
+    float path;
+};
+
+// gi.footprint = "shares": the share of the footprint its quarters' covers leave open.
+float shares_open(vec4 share) {
+    return 1.0 - dot(share, vec4(0.25));
+}
+
+// The two axes across `dir` for the quarters' shares: the first is the grid axis `dir` leans
+// along least, made perpendicular to it, so the quarters of a cone that runs along a grid axis
+// split the footprint along the grid's walls.
+mat3 footprint_frame(vec3 dir) {
+    vec3 m = abs(dir);
+    vec3 e = m.x <= m.y && m.x <= m.z ? vec3(1.0, 0.0, 0.0) : (m.y <= m.z ? vec3(0.0, 1.0, 0.0) : vec3(0.0, 0.0, 1.0));
+    vec3 a = normalize(e - dot(e, dir) * dir);
+    return mat3(a, cross(dir, a), dir);
 }
 
 // One step of a cone: what a path of `step_len` voxels through the footprint of texel side s
@@ -287,7 +308,7 @@ bool quadrants() {
 //
 // gi.footprint = "quadrants" (`quarters`): the footprint (diameter 2s across the cone) as four
 // samples of side s/2, one on each quarter, each quarter compositing its own transmittance
-// `quarter_t` along the path (so each step is beta times a quarter's diameter, s: trace_cone).
+// `fp.parts` along the path (so each step is beta times a quarter's diameter, s: trace_cone).
 // What covers one part of the footprint stays in that part: a wall beside the cone's axis that
 // sample after sample covers in part blocks the quarters it covers once, rather than a little
 // more of the whole footprint at every sample; and a side wall and a roof that cover different
@@ -298,34 +319,77 @@ bool quadrants() {
 // texel). Below s = 2 (quarters of texels under a voxel) the quarters share the whole
 // footprint's one sample.
 //
-// One call of sample_voxels, in a SAMPLER_LOOP over the parts (one, or four).
-vec4 footprint_segment(vec3 p, vec3 dir, float tan_half, mat3 across, float s, float step_len, bool quarters,
-                       inout vec4 quarter_t) {
-    float before = quarters ? dot(quarter_t, vec4(0.25)) : 1.0;
+// gi.footprint = "shares": steps as long as "whole"'s, each taking first one sample per quarter
+// of the footprint (side s/2, at its centre, along the cone), whose opacity over one texel is
+// the share of that quarter something covers (the volumes average opacity across their axis:
+// aniso_mip.comp), then the whole footprint's sample. Each quarter keeps the largest share it
+// has met (`fp.parts`): a wall beside the cone is counted once, however many steps it runs
+// along, and what a quarter's share gains adds the quarters' radiance through the
+// transmittance before it. The whole footprint's opacity beyond the quarters' mean share at
+// this step is what the open part meets along the path (`fp.path`: what crosses the cone). The
+// cone's transmittance is path * shares_open. Largest shares assume that cover which comes and
+// goes in a quarter (leaves) is the same cover each time. Below s = 2 there are no quarters.
+//
+// One call of sample_voxels, in a SAMPLER_LOOP over the parts (one, four, or five).
+vec4 footprint_segment(vec3 p, vec3 dir, float tan_half, mat3 across, float s, float step_len, uint kind,
+                       inout Footprint fp) {
+    bool quarters = kind == GI_FLAG_QUADRANTS, split = kind == GI_FLAG_SHARES;
+    float before = quarters ? dot(fp.parts, vec4(0.25)) : (split ? fp.path * shares_open(fp.parts) : 1.0);
     if (before <= 0.0) return vec4(0.0);
-    int parts = quarters && s >= 2.0 ? 4 : 1;
-    float q = parts == 4 ? 0.5 * s : s;
-    vec3 radiance = vec3(0.0);
-    SAMPLER_LOOP for (int k = 0; k < 4; ++k) {
+    int parts = quarters && s >= 2.0 ? 4 : (split && s >= 2.0 ? 5 : 1);
+    float q = parts == 1 ? s : 0.5 * s;
+    vec3 radiance = vec3(0.0), beside = vec3(0.0);
+    vec4 shares = fp.parts;
+    float covered = 0.0;  // "shares": the quarters' mean share at this step
+    SAMPLER_LOOP for (int k = 0; k < 5; ++k) {
         if (k >= parts) break;
+        // "shares": taps 0..3 on the quarters, then (k = 4, or alone) the whole footprint.
+        bool tap = parts == 5 && k < 4;
         vec3 pk = p, dk = dir;
+        float lod = log2(q), depth = step_len / q;
         if (parts == 4) {
             vec2 side = vec2((k & 1) == 0 ? -q : q, (k & 2) == 0 ? -q : q);
             pk = p + across[0] * side.x + across[1] * side.y;
             dk = normalize(dir + (across[0] * sign(side.x) + across[1] * sign(side.y)) * (0.5 * tan_half));
+        } else if (tap) {
+            pk = p + across[0] * ((k & 1) == 0 ? -q : q) + across[1] * ((k & 2) == 0 ? -q : q);
+            depth = 1.0;
+        } else if (parts == 5) {
+            lod = log2(s);
+            depth = step_len / s;
         }
-        vec4 seg = cone_segment(sample_voxels(pk, dk, log2(q)), step_len / q);
-        if (!quarters) return seg;
-        if (parts == 1) {
-            radiance = before * seg.rgb;
-            quarter_t *= 1.0 - seg.a;
+        vec4 seg = cone_segment(sample_voxels(pk, dk, lod), depth);
+        if (!quarters && !split) return seg;
+        if (quarters) {
+            if (parts == 1) {
+                radiance = before * seg.rgb;
+                fp.parts *= 1.0 - seg.a;
+            } else {
+                radiance += 0.25 * fp.parts[k] * seg.rgb;
+                fp.parts[k] *= 1.0 - seg.a;
+            }
+        } else if (tap) {
+            covered += 0.25 * seg.a;
+            float gain = max(seg.a - shares[k], 0.0);
+            shares[k] += gain;
+            // The quarter's radiance (seg.rgb is premultiplied by seg.a), by its gain in share.
+            if (gain > 0.0) beside += seg.rgb / seg.a * gain;
         } else {
-            radiance += 0.25 * quarter_t[k] * seg.rgb;
-            quarter_t[k] *= 1.0 - seg.a;
+            float open = shares_open(fp.parts), now = shares_open(shares);
+            float gained = dot(shares - fp.parts, vec4(1.0));
+            // What the quarters' gains close, lit by their walls' mean radiance.
+            if (gained > 0.0) radiance += fp.path * (open - now) * beside / gained;
+            // The whole footprint's cover beyond what the quarters see at this step is what
+            // the open part meets along the path (the quarters' own is counted in their
+            // shares, once).
+            float a = seg.a > 0.0 && covered < 1.0 ? clamp((seg.a - covered) / (1.0 - covered), 0.0, 1.0) : 0.0;
+            if (a > 0.0) radiance += fp.path * now * seg.rgb / seg.a * a;
+            fp.path *= 1.0 - a;
+            fp.parts = shares;
         }
     }
-    float after = dot(quarter_t, vec4(0.25));
-    return vec4(radiance, before - after) / before;
+    if (quarters) return vec4(radiance, before - dot(fp.parts, vec4(0.25))) / before;
+    return vec4(radiance, before - fp.path * shares_open(fp.parts)) / before;
 }
 
 struct ConeResult {
@@ -390,10 +454,11 @@ ConeResult trace_cone(ConeOrigin o, vec3 dir, float tan_half, float max_t) {
     float rise = dot(dir, o.n);  // height gained per voxel along the cone
     // max_t is measured from the surface point; the cone starts h0 off it.
     max_t -= h0 * max(rise, 0.0);
-    // gi.footprint = "quadrants": the transmittance of each quarter of the footprint.
-    vec4 quarter_t = vec4(1.0);
-    mat3 across = tangent_frame(dir);
-    bool quarters = quadrants();
+    // gi.footprint: what the cone has met across its footprint (Footprint).
+    uint kind = gi.counts.w & (GI_FLAG_QUADRANTS | GI_FLAG_SHARES);
+    bool quarters = kind == GI_FLAG_QUADRANTS;
+    Footprint fp = Footprint(vec4(quarters ? 1.0 : 0.0), 1.0);
+    mat3 across = kind == GI_FLAG_SHARES ? footprint_frame(dir) : tangent_frame(dir);
     float t = 0.0;
     for (int i = 0; i < 1024 && t < max_t && r.opacity < 0.995; ++i) {
         vec3 p = g + dir * t;
@@ -401,7 +466,7 @@ ConeResult trace_cone(ConeOrigin o, vec3 dir, float tan_half, float max_t) {
         if (any(lessThan(p, vec3(-1.5 * s))) || any(greaterThan(p, vec3(res + 1.5 * s)))) break;
         s = min(s, clear_texel(o, l1, h0 + t * max(rise, 0.0)));
         float step_len = 2.0 * beta * (quarters && s >= 2.0 ? 0.5 * s : s);
-        vec4 seg = footprint_segment(p, dir, tan_half, across, s, step_len, quarters, quarter_t);
+        vec4 seg = footprint_segment(p, dir, tan_half, across, s, step_len, kind, fp);
         if (seg.a > 0.0) {
             r.radiance += (1.0 - r.opacity) * seg.rgb;
             r.occlusion += (1.0 - r.occlusion) * seg.a / (1.0 + falloff * t);
@@ -409,7 +474,8 @@ ConeResult trace_cone(ConeOrigin o, vec3 dir, float tan_half, float max_t) {
         }
         t += step_len;
     }
-    if (quarters) r.opacity = 1.0 - dot(quarter_t, vec4(0.25));
+    if (quarters) r.opacity = 1.0 - dot(fp.parts, vec4(0.25));
+    if (kind == GI_FLAG_SHARES) r.opacity = 1.0 - fp.path * shares_open(fp.parts);
     vec3 end = g + dir * t;
     if (any(lessThan(end, vec3(0.0))) || any(greaterThan(end, vec3(res)))) r.sky = 1.0 - r.opacity;
     r.radiance = min(r.radiance, vec3(HALF_MAX));

@@ -189,7 +189,7 @@ The viewer exits at the end of the script; each script frame advances scene time
         /// rsm+lpv), rsm_samples, rsm_radius, rsm_size, lpv_resolution, lpv_steps, specular
         /// (off, cone, rt), specular_rays, rt_hit_indirect (cones, voxel), specular_history,
         /// shadows (shadow-map, cone, rt), opacity (blend, layers), voxel_cover (touch, area,
-        /// directional), footprint and bounce_footprint (whole, quadrants), attenuation
+        /// directional), footprint and bounce_footprint (whole, quadrants, shares), attenuation
         /// (normal-weighted, n-dot-l, per-side), plane_backs (lit, dark, closed)). Sweeps with other
         /// grids into the same
         /// directory add their rows to one frontier, e.g. the cone-tracing grid, then --grid

@@ -99,6 +99,8 @@ pub const GI_FLAG_TWO_TAP: u32 = 2;
 pub const GI_FLAG_LAYERS: u32 = 4;
 /// `gi.footprint = "quadrants"` (glsl/include/cone.glsl).
 pub const GI_FLAG_QUADRANTS: u32 = 8;
+/// `gi.footprint = "shares"` (glsl/include/cone.glsl).
+pub const GI_FLAG_SHARES: u32 = 16;
 
 impl GpuGiParams {
     /// The parameters for `gi` on a grid of `resolution` voxels of `voxel_size`, with
@@ -116,7 +118,11 @@ impl GpuGiParams {
         let flags = if gi.ao { GI_FLAG_AO } else { 0 }
             | if gi.cone_filter == ConeFilter::TwoTap { GI_FLAG_TWO_TAP } else { 0 }
             | if gi.opacity == Opacity::Layers { GI_FLAG_LAYERS } else { 0 }
-            | if gi.footprint == Footprint::Quadrants { GI_FLAG_QUADRANTS } else { 0 };
+            | match gi.footprint {
+                Footprint::Whole => 0,
+                Footprint::Quadrants => GI_FLAG_QUADRANTS,
+                Footprint::Shares => GI_FLAG_SHARES,
+            };
         p.counts = [cones.len() as u32, gi.downsample, mip_levels, flags];
         p.trace = [gi.step, max_distance.min(res * 3f32.sqrt()), gi.start_offset, gi.ao_falloff / res];
         p.shadow =

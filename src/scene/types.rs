@@ -499,6 +499,13 @@ pub enum Footprint {
     /// cover stays where it is across the cone. Steps half as long, so eight times the
     /// lookups.
     Quadrants,
+    /// Steps as long as `whole`'s, each with one more sample per quarter of the footprint (at
+    /// half the texel size), whose opacity is the share of the quarter something covers: each
+    /// quarter keeps the largest share it has met, so a wall beside the cone is counted once,
+    /// and the whole footprint's sample composites only the cover beyond the quarters' (what
+    /// crosses the cone). Five times the lookups; with `gi.cone_filter = "two-tap"` the
+    /// quarters' shares are filtered as opacity (ACCURACY.md, "Quarters' shares").
+    Shares,
 }
 
 /// What a cone sample's optical depth is, from the three directional volumes it blends
