@@ -95,6 +95,9 @@ pub enum Param {
     /// `gi.plane_backs`, what cones see of a one-plane voxel from behind, by name (index in
     /// [`PLANE_BACKS`]).
     PlaneBacks,
+    /// `gi.cone_filter`, how a cone sample filters the volumes, by name (index in
+    /// [`CONE_FILTERS`]).
+    ConeFilter,
 }
 
 /// The `gi.mode` values a sweep can compare, in the order of their index as a knob value.
@@ -127,6 +130,13 @@ pub const ATTENUATIONS: [&str; 3] = ["normal-weighted", "n-dot-l", "per-side"];
 
 /// The `gi.plane_backs` values, in the order of their index as a knob value.
 pub const PLANE_BACKS: [&str; 3] = ["lit", "dark", "closed"];
+
+/// The `gi.cone_filter` values, in the order of their index as a knob value.
+pub const CONE_FILTERS: [&str; 2] = ["trilinear", "two-tap"];
+
+fn trilinear() -> String {
+    "trilinear".to_owned()
+}
 
 fn lit() -> String {
     "lit".to_owned()
@@ -174,7 +184,7 @@ fn vct() -> String {
 }
 
 impl Param {
-    pub const ALL: [Param; 26] = [
+    pub const ALL: [Param; 27] = [
         Param::VoxelResolution,
         Param::DiffuseCones,
         Param::DiffuseConeAngle,
@@ -201,6 +211,7 @@ impl Param {
         Param::BounceFootprint,
         Param::Attenuation,
         Param::PlaneBacks,
+        Param::ConeFilter,
     ];
     /// The key under `[gi]`.
     pub fn key(self) -> &'static str {
@@ -231,6 +242,7 @@ impl Param {
             Param::BounceFootprint => "bounce_footprint",
             Param::Attenuation => "attenuation",
             Param::PlaneBacks => "plane_backs",
+            Param::ConeFilter => "cone_filter",
         }
     }
     /// Short prefix in configuration labels.
@@ -262,6 +274,7 @@ impl Param {
             Param::BounceFootprint => "bfp-",
             Param::Attenuation => "att-",
             Param::PlaneBacks => "backs-",
+            Param::ConeFilter => "filter-",
         }
     }
     /// The names a knob's values are written as, for knobs that take names.
@@ -276,6 +289,7 @@ impl Param {
             Param::Footprint | Param::BounceFootprint => Some(&FOOTPRINTS),
             Param::Attenuation => Some(&ATTENUATIONS),
             Param::PlaneBacks => Some(&PLANE_BACKS),
+            Param::ConeFilter => Some(&CONE_FILTERS),
             _ => None,
         }
     }
@@ -500,6 +514,9 @@ pub struct Row {
     /// `gi.plane_backs` ("lit" in rows from before it was recorded).
     #[serde(default = "lit")]
     pub plane_backs: String,
+    /// `gi.cone_filter` ("trilinear" in rows from before it was recorded).
+    #[serde(default = "trilinear")]
+    pub cone_filter: String,
     /// Median host wall clock of a frame that updates the voxels (relight, mips, bounces)
     /// and traces: the cost when lights or objects move. The front is drawn against this.
     pub frame_ms: f64,
@@ -552,6 +569,7 @@ impl Row {
             bounce_footprint: serde_name(s.bounce_footprint).unwrap_or_default(),
             attenuation: serde_name(s.attenuation).unwrap_or_default(),
             plane_backs: serde_name(s.plane_backs).unwrap_or_else(lit),
+            cone_filter: serde_name(s.cone_filter).unwrap_or_else(trilinear),
             frame_ms: time[0],
             frame_p95_ms: time[1],
             static_frame_ms: time[2],
@@ -647,6 +665,7 @@ impl Row {
             Param::BounceFootprint => name_index(&FOOTPRINTS, &self.bounce_footprint),
             Param::Attenuation => name_index(&ATTENUATIONS, &self.attenuation),
             Param::PlaneBacks => name_index(&PLANE_BACKS, &self.plane_backs),
+            Param::ConeFilter => name_index(&CONE_FILTERS, &self.cone_filter),
         }
     }
 }
@@ -1206,6 +1225,12 @@ mod tests {
         let settings = crate::scene::GiSettings { plane_backs: crate::scene::PlaneBacks::Dark, ..Default::default() };
         let r = Row::new("backs-dark".into(), &settings, [1.0; 3], 1.0, &c);
         assert_eq!((r.knob(Param::PlaneBacks), r.plane_backs.as_str()), (1.0, "dark"));
+        let filters = Grid::parse(&["cone_filter=trilinear,two-tap".into()]).unwrap().configs();
+        assert_eq!(filters[1].overrides(), vec![("gi.cone_filter".to_string(), "\"two-tap\"".to_string())]);
+        assert_eq!(filters[1].label(), "filter-two-tap");
+        let settings = crate::scene::GiSettings { cone_filter: crate::scene::ConeFilter::TwoTap, ..Default::default() };
+        let r = Row::new("filter-two-tap".into(), &settings, [1.0; 3], 1.0, &c);
+        assert_eq!((r.knob(Param::ConeFilter), r.cone_filter.as_str()), (1.0, "two-tap"));
         let settings = crate::scene::GiSettings { plane_backs: crate::scene::PlaneBacks::Closed, ..Default::default() };
         let r = Row::new("backs-closed".into(), &settings, [1.0; 3], 1.0, &c);
         assert_eq!((r.knob(Param::PlaneBacks), r.plane_backs.as_str()), (2.0, "closed"));
@@ -1287,17 +1312,17 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("results.csv");
         write_rows(&path, &[row("a", 10.0, 0.5, 0.9)]).unwrap();
-        // Drop the attenuation, footprint and plane_backs columns, as a results.csv of an older
+        // Drop the attenuation, footprint, plane_backs and cone_filter columns, as a results.csv of an older
         // dvsgi has them.
         let text = std::fs::read_to_string(&path).unwrap();
         let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
         let drop: Vec<usize> = header
             .iter()
             .enumerate()
-            .filter(|(_, h)| ["attenuation", "footprint", "bounce_footprint", "plane_backs"].contains(h))
+            .filter(|(_, h)| ["attenuation", "footprint", "bounce_footprint", "plane_backs", "cone_filter"].contains(h))
             .map(|(i, _)| i)
             .collect();
-        assert_eq!(drop.len(), 4);
+        assert_eq!(drop.len(), 5);
         let older: String = text
             .lines()
             .map(|l| {
@@ -1315,6 +1340,7 @@ mod tests {
         assert_eq!((r.footprint.as_str(), r.attenuation.as_str(), r.bounce_footprint.as_str()), ("whole", "", ""));
         assert!(r.knob(Param::Attenuation).is_nan() && r.knob(Param::BounceFootprint).is_nan());
         assert_eq!((r.plane_backs.as_str(), r.knob(Param::PlaneBacks)), ("lit", 0.0));
+        assert_eq!((r.cone_filter.as_str(), r.knob(Param::ConeFilter)), ("trilinear", 0.0));
     }
 
     #[test]

@@ -190,7 +190,8 @@ The viewer exits at the end of the script; each script frame advances scene time
         /// (off, cone, rt), specular_rays, rt_hit_indirect (cones, voxel), specular_history,
         /// shadows (shadow-map, cone, rt), opacity (blend, layers), voxel_cover (touch, area,
         /// directional), footprint and bounce_footprint (whole, quadrants, shares), attenuation
-        /// (normal-weighted, n-dot-l, per-side), plane_backs (lit, dark, closed)). Sweeps with other
+        /// (normal-weighted, n-dot-l, per-side), plane_backs (lit, dark, closed), cone_filter
+        /// (trilinear, two-tap)). Sweeps with other
         /// grids into the same
         /// directory add their rows to one frontier, e.g. the cone-tracing grid, then --grid
         /// mode=rsm ....
