@@ -25,7 +25,8 @@
 // Every call site of a function is a copy of it in the compiled shader (GLSL inlines calls).
 // The cone step calls the voxel sampler once per part of its footprint (one; four quarters;
 // or four quarters' shares and the whole) and the directional sampler once per level it
-// blends (one or two), each in a SAMPLER_LOOP. build.rs compiles each shader that traces cones twice:
+// blends (one or two), each in a SAMPLER_LOOP. build.rs compiles each shader that traces
+// cones twice:
 // * as it stands, for CPU drivers: the loops are kept, so the sampler is one copy, which
 //   lavapipe compiles on a machine's first frame in a third of the time (BENCHMARKS.md, "What the
 //   cone tracer costs to compile");
