@@ -293,6 +293,13 @@ float shares_open(vec4 share) {
     return 1.0 - dot(share, vec4(0.25));
 }
 
+// The transmittance a cone's footprint has left (1 for "whole", whose caller composites it).
+float footprint_transmittance(uint kind, Footprint fp) {
+    if (kind == GI_FLAG_QUADRANTS) return dot(fp.parts, vec4(0.25));
+    if (kind == GI_FLAG_SHARES) return fp.path * shares_open(fp.parts);
+    return 1.0;
+}
+
 // The two axes across `dir` for the quarters' shares: the first is the grid axis `dir` leans
 // along least, made perpendicular to it, so the quarters of a cone that runs along a grid axis
 // split the footprint along the grid's walls.
@@ -335,7 +342,7 @@ mat3 footprint_frame(vec3 dir) {
 vec4 footprint_segment(vec3 p, vec3 dir, float tan_half, mat3 across, float s, float step_len, uint kind,
                        inout Footprint fp) {
     bool quarters = kind == GI_FLAG_QUADRANTS, split = kind == GI_FLAG_SHARES;
-    float before = quarters ? dot(fp.parts, vec4(0.25)) : (split ? fp.path * shares_open(fp.parts) : 1.0);
+    float before = footprint_transmittance(kind, fp);
     if (before <= 0.0) return vec4(0.0);
     int parts = quarters && s >= 2.0 ? 4 : (split && s >= 2.0 ? 5 : 1);
     float q = parts == 1 ? s : 0.5 * s;
@@ -389,8 +396,7 @@ vec4 footprint_segment(vec3 p, vec3 dir, float tan_half, mat3 across, float s, f
             fp.parts = shares;
         }
     }
-    if (quarters) return vec4(radiance, before - dot(fp.parts, vec4(0.25))) / before;
-    return vec4(radiance, before - fp.path * shares_open(fp.parts)) / before;
+    return vec4(radiance, before - footprint_transmittance(kind, fp)) / before;
 }
 
 struct ConeResult {
@@ -475,8 +481,7 @@ ConeResult trace_cone(ConeOrigin o, vec3 dir, float tan_half, float max_t) {
         }
         t += step_len;
     }
-    if (quarters) r.opacity = 1.0 - dot(fp.parts, vec4(0.25));
-    if (kind == GI_FLAG_SHARES) r.opacity = 1.0 - fp.path * shares_open(fp.parts);
+    if (kind != 0u) r.opacity = 1.0 - footprint_transmittance(kind, fp);
     vec3 end = g + dir * t;
     if (any(lessThan(end, vec3(0.0))) || any(greaterThan(end, vec3(res)))) r.sky = 1.0 - r.opacity;
     r.radiance = min(r.radiance, vec3(HALF_MAX));
