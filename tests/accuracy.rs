@@ -342,6 +342,7 @@ fn presets_render_and_set_can_override_them() {
         "bounce_footprint = \"whole\"",
         "attenuation = \"per-side\"",
         "plane_backs = \"lit\"",
+        "cone_filter = \"two-tap\"",
     ] {
         assert!(has(&max, line), "max: no `{line}` in {max}");
     }

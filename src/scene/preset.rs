@@ -10,9 +10,10 @@ pub enum Preset {
     Medium,
     High,
     Ultra,
-    /// Above the default: quadrant footprints for the pixels' cones and per-side voxel light,
-    /// the most accurate cone setting on both fronts, at 1.1 to 1.4 times `ultra`'s frame in
-    /// lavapipe's sweeps (small images: the pixels' cones are most of its cost on large ones).
+    /// Above the default: quadrant footprints for the pixels' cones, two-tap cone samples and
+    /// per-side voxel light, the most accurate cone setting on both fronts, at about twice
+    /// `ultra`'s frame in lavapipe's sweeps (small images: the pixels' cones are most of its
+    /// cost on large ones).
     Max,
 }
 
@@ -33,7 +34,10 @@ impl Preset {
         // the fronts"); at 64^3 neither is on them. Its quadrants are the pixels' only: the
         // bounce's tripled the frame for no FLIP and are on neither front (they take the Cornell
         // box's walls a few percent lower and keep a closed room's sky out: ACCURACY.md,
-        // "Quadrants where they pay"). Every preset sets both footprints, which cost more than
+        // "Quadrants where they pay"). Its cone samples are two-tap: 0.0999 -> 0.0979 FLIP on
+        // the Cornell box and 0.1158 -> 0.1030 on Sponza for 1.9 times its frame, the top of
+        // both fronts (ACCURACY.md, "Two-tap samples on the fronts"); the others keep
+        // trilinear samples, which cost half. Every preset sets both footprints, which cost more than
         // any other knob. What the cones see of a plane from behind: `ultra`, the default, leaves
         // out the backs that close a solid (at 128^3 as good as lit backs on the Cornell box's
         // front and better on Sponza's, and not growing with the grid as lit backs do); the
@@ -47,7 +51,9 @@ impl Preset {
             Preset::Ultra => ("128", "16", "1", "1", "\"n-dot-l\"", "\"whole\"", "\"closed\""),
             Preset::Max => ("128", "16", "1", "2", "\"per-side\"", "\"quadrants\"", "\"lit\""),
         };
-        let values: [(&str, &str); 12] = [
+        let filter = if self == Preset::Max { "\"two-tap\"" } else { "\"trilinear\"" };
+        let values: [(&str, &str); 13] = [
+            ("cone_filter", filter),
             ("attenuation", attenuation),
             ("footprint", footprint),
             ("plane_backs", backs),
@@ -100,8 +106,8 @@ mod tests {
                 );
                 assert_eq!(gi.bounce_interleave, d.bounce_interleave);
                 assert_eq!(
-                    (gi.attenuation, gi.footprint, gi.bounce_footprint, gi.plane_backs),
-                    (d.attenuation, d.footprint, d.bounce_footprint, d.plane_backs)
+                    (gi.attenuation, gi.footprint, gi.bounce_footprint, gi.plane_backs, gi.cone_filter),
+                    (d.attenuation, d.footprint, d.bounce_footprint, d.plane_backs, d.cone_filter)
                 );
             }
         }
